@@ -1,0 +1,135 @@
+"""The contacts of a scene as a structure of arrays, carried from step to step.
+
+A contact is identified by its (vertex, edge) pair. Its history (state, shear reference point,
+forces and the friction law's fields) follows it while the pair persists, and moves with the
+vertex when it slides onto an adjacent edge of the same block.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dda.contact.detection import CandidateContacts
+from dda.contact.kinematics import contact_geometry
+
+__all__ = ["OPEN", "STICK", "SLIP", "ContactSet", "carry_over"]
+
+OPEN, STICK, SLIP = 0, 1, 2
+STATE_NAMES = ("open", "stick", "slip")
+
+
+@dataclass
+class ContactSet:
+    """Contacts as arrays (length m), with the committed state of each.
+
+    Attributes
+    ----------
+    vertex, edge : vertex index and CCW edge start index (stacked vertex numbering)
+    bj, bk : the vertex's block and the edge's block
+    state : OPEN, STICK or SLIP at the end of the last committed step
+    xi0 : edge parameter of the shear reference point x0' (METHOD.md section 3)
+    t_n, t_s : committed normal (negative in compression) and shear force, N per m
+    history : the friction laws' history fields, each an (m,) array
+    """
+
+    vertex: np.ndarray
+    edge: np.ndarray
+    bj: np.ndarray
+    bk: np.ndarray
+    state: np.ndarray
+    xi0: np.ndarray
+    t_n: np.ndarray
+    t_s: np.ndarray
+    history: dict[str, np.ndarray]
+
+    def __len__(self):
+        return len(self.vertex)
+
+    @classmethod
+    def empty(cls, fields) -> ContactSet:
+        z = np.zeros(0)
+        zi = np.zeros(0, dtype=np.int64)
+        return cls(zi, zi, zi, zi, np.zeros(0, dtype=np.int8), z, z, z,
+                   {k: z.copy() for k in fields})
+
+    def copy(self) -> ContactSet:
+        return ContactSet(
+            self.vertex.copy(), self.edge.copy(), self.bj.copy(), self.bk.copy(),
+            self.state.copy(), self.xi0.copy(), self.t_n.copy(), self.t_s.copy(),
+            {k: v.copy() for k, v in self.history.items()},
+        )
+
+
+def carry_over(
+    old: ContactSet, new: CandidateContacts, x: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
+    n_blocks: int,
+) -> tuple[ContactSet, np.ndarray]:
+    """Build the contact set of the new detection, with the history of the old one.
+
+    Returns the set and a boolean mask of the contacts that carry no history (new or open):
+    the caller gives those the initial history of their friction law.
+
+    A pair found again keeps everything. A vertex that was in contact with an edge and is now
+    found on the adjacent edge of the same block keeps its state and history, and its shear
+    reference point is placed so that g_s is the same on the new edge as on the old.
+    """
+    m = len(new)
+    n_v = len(x)
+    state = np.zeros(m, dtype=np.int8)
+    xi0 = np.zeros(m)
+    t_n = np.zeros(m)
+    t_s = np.zeros(m)
+    history = {k: np.zeros(m) for k in old.history}
+    geom = contact_geometry(x, new.vertex, new.edge, nxt)
+    src = np.full(m, -1, dtype=np.int64)
+    if len(old):
+        old_key = old.vertex * n_v + old.edge
+        order = np.argsort(old_key)
+        new_key = new.vertex * n_v + new.edge
+        pos = np.clip(np.searchsorted(old_key[order], new_key), 0, len(old) - 1)
+        hit = old_key[order][pos] == new_key
+        src[hit] = order[pos[hit]]
+        # transfer to an adjacent edge of the same block
+        closed_old = np.flatnonzero(old.state != OPEN)
+        miss = np.flatnonzero(~hit)
+        if len(closed_old) and len(miss):
+            key2 = old.vertex[closed_old] * n_blocks + old.bk[closed_old]
+            o2 = np.argsort(key2)
+            want = new.vertex[miss] * n_blocks + new.bk[miss]
+            p2 = np.clip(np.searchsorted(key2[o2], want), 0, len(o2) - 1)
+            found = key2[o2][p2] == want
+            cand = closed_old[o2[p2]]
+            adjacent = (nxt[old.edge[cand]] == new.edge[miss]) | (
+                prv[old.edge[cand]] == new.edge[miss]
+            )
+            # the old pair must be gone from the new detection
+            taken = np.zeros(len(old), dtype=bool)
+            taken[src[src >= 0]] = True
+            ok = found & adjacent & ~taken[cand]
+            moved = miss[ok]
+            from_old = cand[ok]
+            if len(moved):
+                og = contact_geometry(x, old.vertex[from_old], old.edge[from_old], nxt)
+                g_s = og.shear_gap(old.xi0[from_old])
+                src[moved] = from_old
+                # keep g_s: xi0 on the new edge is the foot minus the old shear gap
+                shift = geom.xi[moved] - g_s / geom.length[moved]
+                xi0[moved] = shift
+        carried = src >= 0
+        state[carried] = old.state[src[carried]]
+        t_n[carried] = old.t_n[src[carried]]
+        t_s[carried] = old.t_s[src[carried]]
+        same = carried.copy()
+        same[src >= 0] = old.edge[src[carried]] == new.edge[carried]
+        xi0[same] = old.xi0[src[same]]
+        for k in history:
+            history[k][carried] = old.history[k][src[carried]]
+    fresh = state == OPEN
+    # an open contact's shear reference follows the foot until it closes
+    xi0[fresh] = geom.xi[fresh]
+    t_n[fresh] = 0.0
+    t_s[fresh] = 0.0
+    contacts = ContactSet(new.vertex, new.edge, new.bj, new.bk, state, xi0, t_n, t_s, history)
+    return contacts, fresh

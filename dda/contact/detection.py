@@ -1,0 +1,300 @@
+"""Contact detection: a broad phase on bounding boxes and a vertex-edge narrow phase.
+
+Everything works on the stacked vertex arrays of :mod:`dda.geometry` and returns arrays.
+
+Conventions
+-----------
+Edge ``e`` of a block is the counter-clockwise edge from vertex ``e`` to ``next(e)``. A contact
+pairs vertex P1 of block j with edge e of block k and uses the edge reversed, P2 = next(e) and
+P3 = e, so that the left normal ``n = (1/l) [y2 - y3, x3 - x2]`` of METHOD.md section 3 is the
+outward normal of block k and ``g_n < 0`` is penetration.
+
+Rules of the narrow phase (METHOD.md section 3)
+-----------------------------------------------
+A vertex-edge pair is a contact candidate when
+1. the vertex is convex (a reflex vertex cannot touch an edge first);
+2. the foot of the perpendicular lies on the edge (0 <= xi <= 1 up to round-off);
+3. the gap lies in ``[-penetration_limit, search_distance]``;
+4. the vertex is locally the first point of its block to cross the edge's line: both of its
+   edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG``.
+Of several edges of one block that pass for the same vertex, the one whose outward normal is
+most opposed to the vertex's outward bisector is kept. A vertex-vertex case (the foot at the
+end of the edge, the two vertices within the search distance) shows up as two mirrored pairs,
+P on an edge at Q and Q on an edge at P; only the better opposed one is kept.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dda.geometry import next_vertex_index
+
+__all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts"]
+
+ENTRANCE_TOLERANCE_DEG = 20.0
+_XI_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class VertexTopology:
+    """Per-vertex neighbours, owning block, convexity and outward bisector."""
+
+    offsets: np.ndarray
+    block: np.ndarray
+    nxt: np.ndarray
+    prv: np.ndarray
+
+    @classmethod
+    def from_offsets(cls, offsets: np.ndarray) -> VertexTopology:
+        counts = np.diff(offsets)
+        nxt = next_vertex_index(offsets)
+        prv = np.empty_like(nxt)
+        prv[nxt] = np.arange(len(nxt))
+        block = np.repeat(np.arange(len(counts)), counts)
+        return cls(offsets=offsets, block=block, nxt=nxt, prv=prv)
+
+    def convex_and_bisector(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Convexity of every vertex and its outward unit bisector."""
+        a = x[self.prv] - x
+        b = x[self.nxt] - x
+        cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        convex = cross < 0.0  # counter-clockwise polygon: prev -> v -> next turns left
+        ua = a / np.linalg.norm(a, axis=1)[:, None]
+        ub = b / np.linalg.norm(b, axis=1)[:, None]
+        inward = ua + ub
+        norm = np.linalg.norm(inward, axis=1)
+        # a straight vertex has no bisector; its inward normal is the left normal of prev->next
+        straight = norm < 1e-12
+        left = np.stack([-ub[:, 1], ub[:, 0]], axis=1)
+        inward = np.where(straight[:, None], left, inward / np.maximum(norm, 1e-300)[:, None])
+        return convex, -inward
+
+
+def bounding_boxes(x: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """(n_blocks, 4) boxes [xmin, ymin, xmax, ymax]."""
+    starts = offsets[:-1]
+    lo = np.minimum.reduceat(x, starts, axis=0)
+    hi = np.maximum.reduceat(x, starts, axis=0)
+    return np.concatenate([lo, hi], axis=1)
+
+
+def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
+    """Pairs (i < j) of blocks whose boxes, grown by ``margin``, overlap (sort and sweep).
+
+    The sweep runs along the axis of larger spread of the box centres; every step is a numpy
+    operation (sort, searchsorted, repeat), so the cost is O(N log N + candidate pairs).
+    """
+    n = len(boxes)
+    if n < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    lo = boxes[:, :2] - margin
+    hi = boxes[:, 2:] + margin
+    centres = 0.5 * (lo + hi)
+    axis = int(np.argmax(np.ptp(centres, axis=0)))
+    other = 1 - axis
+    order = np.argsort(lo[:, axis], kind="stable")
+    lo_sorted = lo[order, axis]
+    stop = np.searchsorted(lo_sorted, hi[order, axis], side="right")
+    first = np.arange(1, n + 1)
+    counts = np.maximum(stop - first, 0)
+    total = int(counts.sum())
+    if total == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    i_sorted = np.repeat(np.arange(n), counts)
+    run_start = np.repeat(np.cumsum(counts) - counts, counts)
+    j_sorted = np.repeat(first, counts) + (np.arange(total) - run_start)
+    i, j = order[i_sorted], order[j_sorted]
+    keep = (lo[i, other] <= hi[j, other]) & (lo[j, other] <= hi[i, other])
+    i, j = i[keep], j[keep]
+    return np.stack([np.minimum(i, j), np.maximum(i, j)], axis=1)
+
+
+@dataclass
+class CandidateContacts:
+    """Vertex-edge pairs found by the narrow phase (edge = start vertex of the CCW edge)."""
+
+    vertex: np.ndarray
+    edge: np.ndarray
+    bj: np.ndarray
+    bk: np.ndarray
+
+    def __len__(self):
+        return len(self.vertex)
+
+
+def _directed_vertex_block_pairs(pairs, topo, x, boxes, margin):
+    """Every (vertex of j, block k) for both orders of each pair, vertex inside k's box."""
+    j = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    k = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    counts = np.diff(topo.offsets)[j]
+    pid = np.repeat(np.arange(len(j)), counts)
+    run_start = np.repeat(np.cumsum(counts) - counts, counts)
+    vertex = topo.offsets[j][pid] + (np.arange(int(counts.sum())) - run_start)
+    kk = k[pid]
+    p = x[vertex]
+    box = boxes[kk]
+    inside = (
+        (p[:, 0] >= box[:, 0] - margin)
+        & (p[:, 0] <= box[:, 2] + margin)
+        & (p[:, 1] >= box[:, 1] - margin)
+        & (p[:, 1] <= box[:, 3] + margin)
+    )
+    return vertex[inside], kk[inside]
+
+
+def _expand_to_edges(vertex, kblock, offsets):
+    counts = np.diff(offsets)[kblock]
+    pid = np.repeat(np.arange(len(vertex)), counts)
+    run_start = np.repeat(np.cumsum(counts) - counts, counts)
+    edge = offsets[kblock][pid] + (np.arange(int(counts.sum())) - run_start)
+    return vertex[pid], edge
+
+
+def narrow_phase(
+    x: np.ndarray,
+    topo: VertexTopology,
+    search_distance: float,
+    penetration_limit: float,
+    pairs: np.ndarray | None = None,
+) -> CandidateContacts:
+    """Vertex-edge contact candidates of the current configuration (rules in the module doc).
+
+    Parameters
+    ----------
+    x : (n_vertices, 2) current vertex positions
+    topo : VertexTopology
+    search_distance : largest gap at which a pair is kept (open contacts are tracked)
+    penetration_limit : deepest penetration at which a pair is still recognised
+    pairs : block pairs of the broad phase (computed here when None)
+    """
+    boxes = bounding_boxes(x, topo.offsets)
+    margin = max(search_distance, penetration_limit)
+    if pairs is None:
+        pairs = broad_phase(boxes, margin)
+    empty = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
+    if len(pairs) == 0:
+        return empty
+    vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, margin)
+    convex, bisector = topo.convex_and_bisector(x)
+    keep = convex[vertex]
+    vertex, kblock = vertex[keep], kblock[keep]
+    if len(vertex) == 0:
+        return empty
+    vertex, edge = _expand_to_edges(vertex, kblock, topo.offsets)
+
+    p1 = x[vertex]
+    p2 = x[topo.nxt[edge]]
+    p3 = x[edge]
+    d = p3 - p2
+    length = np.hypot(d[:, 0], d[:, 1])
+    tau = d / length[:, None]
+    normal = np.stack([-tau[:, 1], tau[:, 0]], axis=1)
+    rel = p1 - p2
+    gap = np.einsum("ij,ij->i", rel, normal)
+    xi = np.einsum("ij,ij->i", rel, tau) / length
+    ok = (xi >= -_XI_TOL) & (xi <= 1.0 + _XI_TOL)
+    ok &= (gap <= search_distance) & (gap >= -penetration_limit)
+    # entrance test: both edges at the vertex leave towards the outside of the edge's line
+    sin_tol = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
+    for nb in (topo.prv[vertex], topo.nxt[vertex]):
+        arm = x[nb] - p1
+        arm_len = np.hypot(arm[:, 0], arm[:, 1])
+        ok &= np.einsum("ij,ij->i", arm, normal) >= -sin_tol * arm_len
+    vertex, edge, xi, normal, p1 = vertex[ok], edge[ok], xi[ok], normal[ok], p1[ok]
+    if len(vertex) == 0:
+        return empty
+    kblock = topo.block[edge]
+    score = -np.einsum("ij,ij->i", normal, bisector[vertex])
+
+    # one edge per (vertex, block): the best opposed
+    order = np.lexsort((-score, kblock, vertex))
+    vertex, edge, xi, kblock, score, p1 = (
+        a[order] for a in (vertex, edge, xi, kblock, score, p1)
+    )
+    first = np.ones(len(vertex), dtype=bool)
+    first[1:] = (vertex[1:] != vertex[:-1]) | (kblock[1:] != kblock[:-1])
+    vertex, edge, xi, kblock, score, p1 = (
+        a[first] for a in (vertex, edge, xi, kblock, score, p1)
+    )
+
+    # vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)
+    near_end = np.where(xi < 0.5, topo.nxt[edge], edge)
+    dist = np.linalg.norm(p1 - x[near_end], axis=1)
+    vv = dist <= max(search_distance, penetration_limit)
+    if vv.any():
+        idx = np.flatnonzero(vv)
+        a = np.minimum(vertex[idx], near_end[idx])
+        b = np.maximum(vertex[idx], near_end[idx])
+        order = np.lexsort((vertex[idx], -score[idx], b, a))
+        a, b, idx = a[order], b[order], idx[order]
+        dup = np.zeros(len(idx), dtype=bool)
+        dup[1:] = (a[1:] == a[:-1]) & (b[1:] == b[:-1])
+        drop = np.zeros(len(vertex), dtype=bool)
+        drop[idx[dup]] = True
+        vertex, edge, kblock = vertex[~drop], edge[~drop], kblock[~drop]
+    return CandidateContacts(
+        vertex=vertex, edge=edge, bj=topo.block[vertex], bk=kblock
+    )
+
+
+def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9) -> list:
+    """Pairs of blocks whose interiors overlap (touching along edges or at corners is fine).
+
+    Two simple polygons overlap when a vertex of one lies strictly inside the other or two of
+    their edges cross properly. Used once, to check a scene before a run.
+    """
+    topo = VertexTopology.from_offsets(offsets)
+    boxes = bounding_boxes(x, offsets)
+    pairs = broad_phase(boxes, 0.0)
+    if len(pairs) == 0:
+        return []
+    size = np.max(boxes[:, 2:] - boxes[:, :2])
+    tol = rel_tol * size
+    vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
+    vertex, edge = _expand_to_edges(vertex, kblock, offsets)
+    p = x[vertex]
+    a = x[edge]
+    b = x[topo.nxt[edge]]
+    # strictly inside: winding by ray crossing, and farther than tol from every edge
+    cond = (a[:, 1] > p[:, 1]) != (b[:, 1] > p[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xcross = a[:, 0] + (p[:, 1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    crossing = cond & (p[:, 0] < xcross)
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.einsum("ij,ij->i", ab, ab), 0.0, 1.0)
+    dist = np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
+    key = vertex * len(boxes) + topo.block[edge]
+    uniq, inv = np.unique(key, return_inverse=True)
+    count = np.bincount(inv, weights=crossing.astype(float))
+    mind = np.full(len(uniq), np.inf)
+    np.minimum.at(mind, inv, dist)
+    inside = (count % 2 == 1) & (mind > tol)
+    bad = set()
+    for k in uniq[inside]:
+        v, blk = divmod(int(k), len(boxes))
+        pair = (min(int(topo.block[v]), blk), max(int(topo.block[v]), blk))
+        bad.add(pair)
+    # proper edge crossings between the two blocks of a pair
+    # every edge of one block against every edge of the other (no box filter: an edge may
+    # cross a box whose corners all lie outside it)
+    e1, blk2 = _directed_vertex_block_pairs(pairs, topo, x, boxes, np.inf)
+    e1, e2 = _expand_to_edges(e1, blk2, offsets)
+    p1, p2 = x[e1], x[topo.nxt[e1]]
+    q1, q2 = x[e2], x[topo.nxt[e2]]
+
+    def orient(u, v, w):
+        return (v[:, 0] - u[:, 0]) * (w[:, 1] - u[:, 1]) - (v[:, 1] - u[:, 1]) * (w[:, 0] - u[:, 0])
+
+    area_tol = tol * size
+    d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
+    d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
+    proper = (d1 * d2 < 0) & (d3 * d4 < 0)
+    proper &= (np.minimum(np.abs(d1), np.abs(d2)) > area_tol) & (
+        np.minimum(np.abs(d3), np.abs(d4)) > area_tol
+    )
+    for v1, v2 in zip(e1[proper].tolist(), e2[proper].tolist(), strict=True):
+        ba, bb = int(topo.block[v1]), int(topo.block[v2])
+        bad.add((min(ba, bb), max(ba, bb)))
+    return sorted(bad)

@@ -1,0 +1,153 @@
+"""The generic vertex-edge contact element, vectorized over every contact of a step.
+
+It owns the kinematics of the step's contacts (METHOD.md section 3), asks each friction law for
+forces and tangents of its contacts (section 4), and returns stiffness and force contributions
+as (m, 12, 12) and (m, 12) arrays for one sparse assembly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dda.contact.contacts import SLIP, STICK, ContactSet
+from dda.contact.friction import FrictionLaw
+from dda.contact.kinematics import (
+    ContactGeometry,
+    contact_geometry,
+    first_variation_rows,
+    tributary_length,
+)
+
+__all__ = ["ContactElement", "LawGroups"]
+
+
+@dataclass
+class LawGroups:
+    """Contacts grouped by the friction law they share: ``[(law, indices), ...]``."""
+
+    groups: list[tuple[FrictionLaw, np.ndarray]]
+
+    @classmethod
+    def build(cls, law_index: np.ndarray, laws: list[FrictionLaw]) -> LawGroups:
+        groups = []
+        for i in np.unique(law_index):
+            groups.append((laws[int(i)], np.flatnonzero(law_index == i)))
+        return cls(groups)
+
+    def initial_history(self, history: dict[str, np.ndarray], mask: np.ndarray) -> None:
+        """Give the contacts in ``mask`` the initial history of their law (in place)."""
+        for law, idx in self.groups:
+            sel = idx[mask[idx]]
+            if len(sel) == 0:
+                continue
+            for k, v in law.initial_state(len(sel)).items():
+                history.setdefault(k, np.zeros(len(mask)))[sel] = v
+
+    def _select(self, history, law, idx):
+        return {k: history[k][idx] for k in law.history_fields()}
+
+    def return_map(self, history, delta_g_s, t_n, shear_penalty, length, where=None):
+        """Return map of every contact (or those in ``where``) through its own law.
+
+        Returns shear force, slipping flag and the trial history as full-length arrays.
+        """
+        m = len(delta_g_s)
+        t_s = np.zeros(m)
+        slipping = np.zeros(m, dtype=bool)
+        trial_history = {k: v.copy() for k, v in history.items()}
+        for law, idx in self.groups:
+            if where is not None:
+                idx = idx[where[idx]]
+            if len(idx) == 0:
+                continue
+            trial = law.return_map(
+                self._select(history, law, idx), delta_g_s[idx], t_n[idx],
+                shear_penalty[idx], length[idx],
+            )
+            t_s[idx] = trial.t_s
+            slipping[idx] = trial.slipping
+            for k, v in law.commit(trial).items():
+                trial_history[k][idx] = v
+        return t_s, slipping, trial_history
+
+    def elastic_update(self, history, delta_g_s, where):
+        """History after an elastic (stick) step of the contacts in ``where`` (in a copy)."""
+        out = {k: v.copy() for k, v in history.items()}
+        for law, idx in self.groups:
+            idx = idx[where[idx]]
+            if len(idx) == 0:
+                continue
+            for k, v in law.elastic_update(self._select(history, law, idx), delta_g_s[idx]).items():
+                out[k][idx] = v
+        return out
+
+
+class ContactElement:
+    """Vertex-edge penalty contacts of one step, linearized about the step's start.
+
+    Parameters
+    ----------
+    contacts : ContactSet
+        The step's contacts with their committed history.
+    x : (n_vertices, 2) vertex positions at the start of the step
+    centroids : (n_blocks, 2) block centroids at the start of the step
+    nxt, prv : vertex neighbours (see :class:`dda.contact.detection.VertexTopology`)
+    normal_penalty, shear_penalty : (m,) penalties of each contact's joint
+    laws : LawGroups
+    """
+
+    def __init__(self, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
+                 shear_penalty, laws: LawGroups):
+        self.contacts = contacts
+        self.bj = contacts.bj
+        self.bk = contacts.bk
+        self.normal_penalty = normal_penalty
+        self.shear_penalty = shear_penalty
+        self.laws = laws
+        geom: ContactGeometry = contact_geometry(x, contacts.vertex, contacts.edge, nxt)
+        self.geometry = geom
+        self.gap0 = geom.gap
+        self.length = tributary_length(x, contacts.vertex, geom, prv, nxt)
+        self.e_row, self.i_row = first_variation_rows(
+            geom, contacts.xi0, centroids[contacts.bj], centroids[contacts.bk]
+        )
+
+    def __len__(self):
+        return len(self.bj)
+
+    def pair_increments(self, d: np.ndarray) -> np.ndarray:
+        """(m, 12) increments [d_j; d_k] of each contact's two blocks from (n_blocks, 6) d."""
+        return np.concatenate([d[self.bj], d[self.bk]], axis=1)
+
+    def linear_gaps(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Normal gap and shear increment linearized at the step's start: g_n0 + E d, I d."""
+        dd = self.pair_increments(d)
+        gap = self.gap0 + np.einsum("mi,mi->m", self.e_row, dd)
+        dgs = np.einsum("mi,mi->m", self.i_row, dd)
+        return gap, dgs
+
+    def legacy_contributions(self, state, g_se, t_s_slip):
+        """Stiffness and force of original DDA's springs (METHOD.md section 4, legacy terms).
+
+        Closed contacts: normal spring ``p_n E^T E`` with force ``-p_n g_n0 E^T``; stick:
+        shear spring ``p_s I^T I`` with force ``-p_s g_se I^T``; slip: the friction force
+        ``-t_s I^T`` as a load.
+
+        Returns
+        -------
+        k : (m, 12, 12) and f : (m, 12)
+        """
+        closed = state != 0
+        stick = state == STICK
+        slip = state == SLIP
+        kn = np.where(closed, self.normal_penalty, 0.0)
+        ks = np.where(stick, self.shear_penalty, 0.0)
+        e, i = self.e_row, self.i_row
+        k = kn[:, None, None] * (e[:, :, None] * e[:, None, :])
+        k += ks[:, None, None] * (i[:, :, None] * i[:, None, :])
+        fn = kn * self.gap0
+        fs = np.where(stick, ks * g_se, 0.0) + np.where(slip, t_s_slip, 0.0)
+        f = -(fn[:, None] * e + fs[:, None] * i)
+        return k, f

@@ -1,0 +1,150 @@
+"""Friction laws as return maps (METHOD.md sections 4 and 6).
+
+A law is vectorized over every contact that shares it and owns its history fields. It is asked
+for a trial built from the committed history every time (so a reverted step costs nothing) and
+for the consistent tangent of that trial. It never touches the global system.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dda._checks import finite_number
+
+__all__ = ["FrictionLaw", "FrictionTrial", "CoulombSingle"]
+
+
+@dataclass
+class FrictionTrial:
+    """The outcome of one return map, per contact.
+
+    Attributes
+    ----------
+    t_s : shear force (N per m of thickness), the same sign convention as g_s
+    slipping : True where the trial force was returned to the yield surface
+    strength : the shear strength used in the yield check (N per m)
+    state : the trial history, committed as it is when the step converges
+    """
+
+    t_s: np.ndarray
+    slipping: np.ndarray
+    strength: np.ndarray
+    state: dict[str, np.ndarray]
+    extra: dict[str, np.ndarray] = field(default_factory=dict)
+
+
+class FrictionLaw(ABC):
+    """Base class of the friction laws: one subclass per law, vectorized over contacts.
+
+    Every law keeps at least the elastic shear displacement ``g_se`` (so ``t_s = p_s g_se``) and
+    the accumulated slip ``slip``; a law adds its own fields in :meth:`history_fields`.
+    """
+
+    def history_fields(self) -> dict[str, float]:
+        """Names of the history fields and their value for a contact that has just closed."""
+        return {"g_se": 0.0, "slip": 0.0}
+
+    def initial_state(self, n: int) -> dict[str, np.ndarray]:
+        """History of ``n`` contacts that have just closed."""
+        return {k: np.full(n, v, dtype=float) for k, v in self.history_fields().items()}
+
+    @abstractmethod
+    def return_map(
+        self,
+        committed: dict[str, np.ndarray],
+        delta_g_s: np.ndarray,
+        t_n: np.ndarray,
+        shear_penalty: np.ndarray,
+        length: np.ndarray,
+    ) -> FrictionTrial:
+        """Backward-Euler return map of one step (METHOD.md section 4, H9).
+
+        Parameters
+        ----------
+        committed : history at the start of the step (never modified)
+        delta_g_s : shear displacement increment since the committed state
+        t_n : normal force (negative in compression)
+        shear_penalty : p_s of each contact
+        length : tributary contact length l_c of each contact (turns stresses into forces)
+        """
+
+    @abstractmethod
+    def tangent(
+        self, trial: FrictionTrial, normal_penalty: np.ndarray, shear_penalty: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Consistent tangent ``(d t_s / d g_s, d t_s / d g_n)`` of a trial, per contact."""
+
+    def elastic_update(
+        self, committed: dict[str, np.ndarray], delta_g_s: np.ndarray
+    ) -> dict[str, np.ndarray]:
+        """History after a step taken on the elastic (stick) branch without a return map.
+
+        This is legacy DDA's way: a locked contact keeps its spring force even when it lies
+        above the strength, until it is pulled back at the start of the next step.
+        """
+        state = {k: v.copy() for k, v in committed.items()}
+        state["g_se"] = committed["g_se"] + delta_g_s
+        return state
+
+    def commit(self, trial: FrictionTrial) -> dict[str, np.ndarray]:
+        """The history to carry into the next step once the step has converged."""
+        return trial.state
+
+
+class CoulombSingle(FrictionLaw):
+    """Coulomb friction with one angle and optional cohesion (METHOD.md section 4).
+
+    Yield function ``f = |t_s| - (c l_c + |t_n| tan(phi))``; a trial above it is returned to
+    the surface in the direction of the trial force.
+
+    Parameters
+    ----------
+    phi : float
+        Friction angle in degrees, in [0, 90).
+    cohesion : float
+        Cohesion c in Pa, applied over the contact's tributary length l_c.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> law = CoulombSingle(phi=45.0)
+    >>> trial = law.return_map(law.initial_state(2), np.array([1e-3, -1e-5]),
+    ...                        np.array([-100.0, -100.0]), np.array([1e6, 1e6]), np.ones(2))
+    >>> trial.t_s.round(6).tolist(), trial.slipping.tolist()
+    [100.0, -10.0], [True, False]
+    """
+
+    def __init__(self, phi: float, cohesion: float = 0.0):
+        phi = finite_number("phi", phi, nonnegative=True, where="CoulombSingle")
+        if phi >= 90.0:
+            raise ValueError(f"CoulombSingle: phi is in degrees and must be below 90, got {phi}")
+        self.phi = phi
+        self.cohesion = finite_number("cohesion", cohesion, nonnegative=True, where="CoulombSingle")
+        self.mu = float(np.tan(np.radians(phi)))
+
+    def __repr__(self):
+        return f"CoulombSingle(phi={self.phi}, cohesion={self.cohesion})"
+
+    def strength(self, t_n: np.ndarray, length: np.ndarray) -> np.ndarray:
+        """Shear strength ``c l_c + |t_n| tan(phi)`` for compressive t_n (zero force when open)."""
+        return self.cohesion * length + np.maximum(-t_n, 0.0) * self.mu
+
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
+        t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
+        strength = self.strength(t_n, length)
+        slipping = np.abs(t_trial) > strength
+        t_s = np.where(slipping, strength * np.sign(t_trial), t_trial)
+        g_se = t_s / shear_penalty
+        slip = committed["slip"] + np.abs(t_trial - t_s) / shear_penalty
+        return FrictionTrial(
+            t_s=t_s, slipping=slipping, strength=strength, state={"g_se": g_se, "slip": slip}
+        )
+
+    def tangent(self, trial, normal_penalty, shear_penalty):
+        # t_n = p_n g_n < 0 in contact, so d|t_n|/d g_n = -p_n
+        dts_dgs = np.where(trial.slipping, 0.0, shear_penalty)
+        dts_dgn = np.where(trial.slipping, -normal_penalty * self.mu * np.sign(trial.t_s), 0.0)
+        return dts_dgs, dts_dgn

@@ -1,0 +1,190 @@
+"""Time histories of the effects a scene can hold: base shaking, prescribed motion, loads.
+
+Each history is evaluated once per step (a handful of user callables per step, never a loop
+over blocks or contacts).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# 5-point Gauss-Legendre rule on [0, 1]: exact for polynomials up to degree 9
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(5)
+_GL_X = 0.5 * (_GL_X + 1.0)
+_GL_W = 0.5 * _GL_W
+
+
+def _as_xy(value, what: str) -> np.ndarray:
+    a = np.asarray(value, dtype=float)
+    if a.shape != (2,):
+        raise ValueError(f"{what} must return two numbers (x, y), got {value!r}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{what} returned a value that is not finite: {value!r}")
+    return a
+
+
+class AccelerationHistory:
+    """A base acceleration a(t) and its exact integrals v(t) and u(t), starting from rest.
+
+    Either a callable ``t -> (ax, ay)`` (integrated step by step with 5-point Gauss-Legendre,
+    exact for polynomials of degree 9 over a step) or a sampled record ``times, values``
+    taken as piecewise linear in time and integrated exactly; a record that starts after
+    t = 0 ramps linearly from zero acceleration at t = 0.
+    """
+
+    def __init__(self, acceleration, times=None, name="shake"):
+        self.name = name
+        self._callable = None
+        if times is None and callable(acceleration):
+            self._callable = acceleration
+            _as_xy(acceleration(0.0), f"{name}: acceleration(t)")
+            self._t = 0.0
+            self._v = np.zeros(2)
+            self._u = np.zeros(2)
+            return
+        if times is None:
+            try:
+                times, acceleration = acceleration
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"{name}: acceleration must be a callable t -> (ax, ay) or a pair "
+                    "(times, values)"
+                ) from None
+        t = np.asarray(times, dtype=float)
+        a = np.asarray(acceleration, dtype=float)
+        if a.ndim == 1:
+            a = np.stack([a, np.zeros_like(a)], axis=1)
+        if t.ndim != 1 or len(t) < 2 or a.shape != (len(t), 2):
+            raise ValueError(
+                f"{name}: times must be a 1-D array of at least 2 samples and the values "
+                f"(n,) or (n, 2) with the same n; got times {t.shape} and values {a.shape}"
+            )
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(a))):
+            raise ValueError(f"{name}: the acceleration record contains NaN or inf")
+        if np.any(np.diff(t) <= 0):
+            raise ValueError(f"{name}: the record's times must increase strictly")
+        if t[0] < 0.0:
+            raise ValueError(f"{name}: the record must start at t = 0, got {t[0]:g}")
+        if t[0] > 0.0:
+            t = np.concatenate([[0.0], t])
+            a = np.concatenate([np.zeros((1, 2)), a])
+        self._times = t
+        self._acc = a
+        h = np.diff(t)[:, None]
+        dv = 0.5 * h * (a[:-1] + a[1:])
+        self._vel = np.concatenate([np.zeros((1, 2)), np.cumsum(dv, axis=0)])
+        du = self._vel[:-1] * h + h * h * (a[:-1] / 3.0 + a[1:] / 6.0)
+        self._disp = np.concatenate([np.zeros((1, 2)), np.cumsum(du, axis=0)])
+
+    @property
+    def end_time(self) -> float:
+        """Last time the history covers (inf for a callable)."""
+        return np.inf if self._callable is not None else float(self._times[-1])
+
+    def check_covers(self, t_end: float):
+        """Raise ValueError when a recorded history ends before ``t_end``."""
+        if t_end > self.end_time * (1 + 1e-12):
+            raise ValueError(
+                f"{self.name}: the acceleration record ends at t = {self.end_time:g} s but the "
+                f"run goes to t = {t_end:g} s; extend the record or shorten the run"
+            )
+
+    def state(self, t: float) -> tuple[np.ndarray, np.ndarray]:
+        """Displacement and velocity at time t (callables must be queried in increasing t)."""
+        if self._callable is not None:
+            return self._advance_callable(t)
+        ts = self._times
+        i = int(np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2))
+        s = t - ts[i]
+        h = ts[i + 1] - ts[i]
+        a0 = self._acc[i]
+        slope = (self._acc[i + 1] - a0) / h
+        v = self._vel[i] + a0 * s + 0.5 * slope * s * s
+        u = self._disp[i] + self._vel[i] * s + 0.5 * a0 * s * s + slope * s**3 / 6.0
+        return u, v
+
+    def _advance_callable(self, t):
+        # u(t) = u0 + v0 h + int_0^h (h - s) a(t0 + s) ds,  v(t) = v0 + int_0^h a(t0 + s) ds
+        if t < self._t - 1e-15:
+            self._t, self._v, self._u = 0.0, np.zeros(2), np.zeros(2)
+        h = t - self._t
+        if h <= 0.0:
+            return self._u.copy(), self._v.copy()
+        s = h * _GL_X
+        a = np.array([_as_xy(self._callable(self._t + si), f"{self.name}: acceleration(t)")
+                      for si in s])
+        v = self._v + h * (_GL_W @ a)
+        u = self._u + self._v * h + h * ((_GL_W * (h - s)) @ a)
+        self._t, self._v, self._u = t, v, u
+        return u.copy(), v.copy()
+
+    def snapshot(self):
+        """Internal integration state, to restore on a reverted step."""
+        if self._callable is None:
+            return None
+        return (self._t, self._v.copy(), self._u.copy())
+
+    def restore(self, snap):
+        if snap is not None:
+            self._t, self._v, self._u = snap[0], snap[1].copy(), snap[2].copy()
+
+
+class DisplacementHistory:
+    """A prescribed displacement ``t -> (ux or None, uy or None)`` of every vertex of a block."""
+
+    def __init__(self, displacement, name="prescribe_motion"):
+        if not callable(displacement):
+            raise ValueError(f"{name}: displacement must be a callable t -> (ux, uy)")
+        self._f = displacement
+        self.name = name
+        first = displacement(0.0)
+        try:
+            items = list(first)
+        except TypeError:
+            raise ValueError(f"{name}: displacement(t) must return (ux, uy)") from None
+        if len(items) != 2:
+            raise ValueError(f"{name}: displacement(t) must return (ux, uy), got {first!r}")
+        self.mask = np.array([v is not None for v in items])
+        if not self.mask.any():
+            raise ValueError(f"{name}: displacement(t) leaves both directions free (None, None)")
+        u0 = self(0.0)
+        if np.any(np.abs(u0) > 0.0):
+            raise ValueError(
+                f"{name}: displacement(0) must be zero (it is measured from the start), got "
+                f"{first!r}"
+            )
+
+    def __call__(self, t: float) -> np.ndarray:
+        items = list(self._f(t))
+        mask = np.array([v is not None for v in items])
+        if len(items) != 2 or not np.array_equal(mask, self.mask):
+            raise ValueError(
+                f"{self.name}: displacement(t) must leave the same directions free at every t"
+            )
+        vals = np.array([0.0 if v is None else float(v) for v in items])
+        if not np.all(np.isfinite(vals)):
+            raise ValueError(f"{self.name}: displacement({t:g}) is not finite: {items!r}")
+        return vals
+
+
+class LoadHistory:
+    """A point load, constant or a callable ``t -> (fx, fy)``."""
+
+    def __init__(self, force, name="point load"):
+        self.name = name
+        if callable(force):
+            self._f = force
+            _as_xy(force(0.0), f"{name}: force(t)")
+        else:
+            value = _as_xy(force, f"{name}: force")
+            self._f = None
+            self._value = value
+
+    @property
+    def constant(self) -> bool:
+        return self._f is None
+
+    def __call__(self, t: float) -> np.ndarray:
+        if self._f is None:
+            return self._value
+        return _as_xy(self._f(t), f"{self.name}: force(t)")

@@ -1,0 +1,242 @@
+"""Block geometry as pure functions on arrays (METHOD.md section 1).
+
+All blocks live in one structure of arrays: the vertices of every block stacked in one
+``(n_vertices, 2)`` array, counter-clockwise within a block, and CSR-style ``offsets`` of length
+``n_blocks + 1`` so that block ``b`` owns ``vertices[offsets[b]:offsets[b + 1]]``.
+
+Examples
+--------
+>>> import numpy as np
+>>> from dda.geometry import polygon_integrals
+>>> square = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+>>> ints = polygon_integrals(square, np.array([0, 4]))
+>>> float(ints.area[0]), ints.centroid[0].tolist(), float(ints.sxx[0])
+(4.0, [1.0, 1.0], 1.3333333333333333)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "PolygonIntegrals",
+    "polygon_integrals",
+    "next_vertex_index",
+    "block_of_vertex",
+    "t_matrix",
+    "mass_matrices",
+    "stiffness_matrices",
+    "vertex_displacements",
+    "signed_areas",
+    "self_intersections",
+]
+
+
+@dataclass(frozen=True)
+class PolygonIntegrals:
+    """Area, centroid and second moments of every block about its own centroid.
+
+    ``sxx = integral (x - x0)^2 dA``, ``syy = integral (y - y0)^2 dA`` and
+    ``sxy = integral (x - x0)(y - y0) dA``, each of shape ``(n_blocks,)``.
+    """
+
+    area: np.ndarray
+    centroid: np.ndarray
+    sxx: np.ndarray
+    syy: np.ndarray
+    sxy: np.ndarray
+
+
+def block_of_vertex(offsets: np.ndarray) -> np.ndarray:
+    """Block index of every vertex, from CSR offsets."""
+    counts = np.diff(offsets)
+    return np.repeat(np.arange(len(counts)), counts)
+
+
+def next_vertex_index(offsets: np.ndarray) -> np.ndarray:
+    """Index of the next vertex counter-clockwise within the same block (wraps per block)."""
+    n = int(offsets[-1])
+    nxt = np.arange(1, n + 1)
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    return nxt
+
+
+def signed_areas(vertices: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+    """Signed area of every polygon (shoelace formula); positive when counter-clockwise."""
+    nxt = next_vertex_index(offsets)
+    ref = np.repeat(vertices[offsets[:-1]], np.diff(offsets), axis=0)
+    p = vertices - ref
+    q = vertices[nxt] - ref
+    cross = p[:, 0] * q[:, 1] - q[:, 0] * p[:, 1]
+    return 0.5 * np.add.reduceat(cross, offsets[:-1])
+
+
+def polygon_integrals(vertices: np.ndarray, offsets: np.ndarray) -> PolygonIntegrals:
+    """Polygon integrals of every block by Green's theorem over its edges (METHOD.md section 1).
+
+    With ``c_i = x_i y_{i+1} - x_{i+1} y_i`` summed over the edges of a counter-clockwise polygon:
+    ``A = sum c_i / 2``, ``Sx = sum c_i (x_i + x_{i+1}) / 6``,
+    ``Sxx = sum c_i (x_i^2 + x_i x_{i+1} + x_{i+1}^2) / 12`` and
+    ``Sxy = sum c_i (2 x_i y_i + x_i y_{i+1} + x_{i+1} y_i + 2 x_{i+1} y_{i+1}) / 24``.
+    Coordinates are taken relative to each block's first vertex to keep the sums well
+    conditioned far from the origin, then the moments are moved to the centroid.
+    """
+    counts = np.diff(offsets)
+    starts = offsets[:-1]
+    nxt = next_vertex_index(offsets)
+    ref = np.repeat(vertices[starts], counts, axis=0)
+    p = vertices - ref
+    q = vertices[nxt] - ref
+    x1, y1, x2, y2 = p[:, 0], p[:, 1], q[:, 0], q[:, 1]
+    c = x1 * y2 - x2 * y1
+    per_edge = np.stack(
+        [
+            c,
+            c * (x1 + x2),
+            c * (y1 + y2),
+            c * (x1 * x1 + x1 * x2 + x2 * x2),
+            c * (y1 * y1 + y1 * y2 + y2 * y2),
+            c * (2 * x1 * y1 + x1 * y2 + x2 * y1 + 2 * x2 * y2),
+        ],
+        axis=1,
+    )
+    s = np.add.reduceat(per_edge, starts, axis=0)
+    area = s[:, 0] / 2.0
+    cx = s[:, 1] / 6.0 / area
+    cy = s[:, 2] / 6.0 / area
+    sxx = s[:, 3] / 12.0 - area * cx * cx
+    syy = s[:, 4] / 12.0 - area * cy * cy
+    sxy = s[:, 5] / 24.0 - area * cx * cy
+    centroid = vertices[starts] + np.stack([cx, cy], axis=1)
+    return PolygonIntegrals(area=area, centroid=centroid, sxx=sxx, syy=syy, sxy=sxy)
+
+
+def t_matrix(points: np.ndarray, centroids: np.ndarray) -> np.ndarray:
+    """First-order displacement matrix T(x, y) of METHOD.md section 1 (H14-H16).
+
+    Parameters
+    ----------
+    points : (n, 2) array
+        Points at which T is evaluated.
+    centroids : (n, 2) array
+        Centroid of the block each point belongs to.
+
+    Returns
+    -------
+    (n, 2, 6) array with ``u(x, y) = T(x, y) d`` for ``d = [u0, v0, r0, ex, ey, gxy]``.
+    """
+    dx = points[:, 0] - centroids[:, 0]
+    dy = points[:, 1] - centroids[:, 1]
+    n = len(dx)
+    t = np.zeros((n, 2, 6))
+    t[:, 0, 0] = 1.0
+    t[:, 1, 1] = 1.0
+    t[:, 0, 2] = -dy
+    t[:, 1, 2] = dx
+    t[:, 0, 3] = dx
+    t[:, 1, 4] = dy
+    t[:, 0, 5] = 0.5 * dy
+    t[:, 1, 5] = 0.5 * dx
+    return t
+
+
+def mass_matrices(ints: PolygonIntegrals, density: np.ndarray) -> np.ndarray:
+    """Consistent mass ``M = rho * integral(T^T T dA)`` of every block, shape (n_blocks, 6, 6).
+
+    The first moments vanish about the centroid, so only S, Sxx, Syy and Sxy appear.
+    """
+    a, sxx, syy, sxy = ints.area, ints.sxx, ints.syy, ints.sxy
+    m = np.zeros((len(a), 6, 6))
+    m[:, 0, 0] = a
+    m[:, 1, 1] = a
+    m[:, 2, 2] = sxx + syy
+    m[:, 3, 3] = sxx
+    m[:, 4, 4] = syy
+    m[:, 5, 5] = 0.25 * (sxx + syy)
+    m[:, 2, 3] = m[:, 3, 2] = -sxy
+    m[:, 2, 4] = m[:, 4, 2] = sxy
+    m[:, 2, 5] = m[:, 5, 2] = 0.5 * (sxx - syy)
+    m[:, 3, 5] = m[:, 5, 3] = 0.5 * sxy
+    m[:, 4, 5] = m[:, 5, 4] = 0.5 * sxy
+    return m * density[:, None, None]
+
+
+def stiffness_matrices(area: np.ndarray, elasticity: np.ndarray) -> np.ndarray:
+    """Elastic stiffness of every block: ``S * D`` on the strain unknowns (METHOD.md section 1).
+
+    Parameters
+    ----------
+    area : (n_blocks,) array
+    elasticity : (n_blocks, 3, 3) array of D matrices (stress = D strain, engineering shear).
+    """
+    k = np.zeros((len(area), 6, 6))
+    k[:, 3:, 3:] = area[:, None, None] * elasticity
+    return k
+
+
+def vertex_displacements(
+    vertices: np.ndarray, centroids: np.ndarray, d: np.ndarray
+) -> np.ndarray:
+    """Displacement of points for the block increments ``d``, with the rotation made exact.
+
+    ``T d`` inflates a rotating block by a factor ``1 + r0^2`` per step; as in Shi's DDA the
+    rotational part is replaced by the finite rotation ``(R(r0) - I)(x - x0)`` so that a rigid
+    spin keeps the area exactly.
+
+    Parameters
+    ----------
+    vertices : (n, 2) array of points
+    centroids : (n, 2) centroid of each point's block
+    d : (n, 6) increments of each point's block
+    """
+    dx = vertices[:, 0] - centroids[:, 0]
+    dy = vertices[:, 1] - centroids[:, 1]
+    r = d[:, 2]
+    c = np.cos(r) - 1.0
+    s = np.sin(r)
+    ex, ey, g = d[:, 3], d[:, 4], d[:, 5]
+    u = d[:, 0] + c * dx - s * dy + ex * dx + 0.5 * g * dy
+    v = d[:, 1] + s * dx + c * dy + 0.5 * g * dx + ey * dy
+    return np.stack([u, v], axis=1)
+
+
+def _segments_cross(p1, p2, q1, q2, tol):
+    """Whether segments p1p2 and q1q2 cross properly (arrays of shape (n, 2))."""
+
+    def orient(a, b, c):
+        return (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+
+    d1 = orient(q1, q2, p1)
+    d2 = orient(q1, q2, p2)
+    d3 = orient(p1, p2, q1)
+    d4 = orient(p1, p2, q2)
+    return (d1 * d2 < -tol) & (d3 * d4 < -tol)
+
+
+def self_intersections(vertices: np.ndarray) -> list[tuple[int, int]]:
+    """Pairs of non-adjacent edges of one polygon that cross or touch (edge i runs i -> i+1)."""
+    n = len(vertices)
+    i, j = np.triu_indices(n, k=2)
+    keep = ~((i == 0) & (j == n - 1))
+    i, j = i[keep], j[keep]
+    p1, p2 = vertices[i], vertices[(i + 1) % n]
+    q1, q2 = vertices[j], vertices[(j + 1) % n]
+    scale = np.ptp(vertices, axis=0).max() ** 2
+    crossing = _segments_cross(p1, p2, q1, q2, 1e-24 * scale * scale)
+    # a vertex lying on a non-adjacent edge also makes the boundary non-simple
+    touching = _point_on_segment(p1, q1, q2, 1e-12 * np.sqrt(scale)) | _point_on_segment(
+        q1, p1, p2, 1e-12 * np.sqrt(scale)
+    )
+    bad = crossing | touching
+    return list(zip(i[bad].tolist(), j[bad].tolist(), strict=True))
+
+
+def _point_on_segment(p, a, b, tol):
+    ab = b - a
+    ap = p - a
+    length2 = np.einsum("ij,ij->i", ab, ab)
+    t = np.einsum("ij,ij->i", ap, ab) / length2
+    foot = a + np.clip(t, 0.0, 1.0)[:, None] * ab
+    return np.linalg.norm(p - foot, axis=1) <= tol

@@ -1,0 +1,143 @@
+"""A VTU/PVD series writer (meshio): one .vtu per recorded step and a .pvd that indexes them.
+
+Each .vtu holds
+- the blocks as polygon cells, with cell data ``block_id``, ``displacement`` (centroid, m),
+  ``velocity`` (centroid, m/s), ``rotation`` (rad) and ``stress`` ([sx, sy, txy], Pa), and point
+  data ``displacement`` and ``velocity`` at the vertices;
+- the closed contacts as vertex cells at the contact points, with cell data ``normal_force``
+  (compression positive, N/m), ``shear_force`` (N/m) and ``contact_state`` (1 stick, 2 slip).
+Block fields are NaN on contact cells and contact fields NaN on block cells; ``kind`` is 0 on
+blocks and 1 on contacts, so a Threshold filter in ParaView separates them.
+Files are written to a temporary name and renamed, so a reader never sees half a file.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import meshio
+import numpy as np
+
+from dda.result import Frame
+
+__all__ = ["VTUWriter"]
+
+
+def _pad3(a: np.ndarray) -> np.ndarray:
+    return np.concatenate([a, np.zeros((len(a), 1))], axis=1)
+
+
+class VTUWriter:
+    """Write a run as ``PREFIX_00000.vtu, ...`` and ``PREFIX.pvd``.
+
+    Parameters
+    ----------
+    prefix : str or Path
+        Path prefix of the files, for example ``"out/case"``; folders are created.
+    every : int
+        Write every this many recorded steps.
+
+    Examples
+    --------
+    >>> import tempfile, os
+    >>> w = VTUWriter(os.path.join(tempfile.mkdtemp(), "case"))
+    >>> w.pvd_path.name
+    'case.pvd'
+    """
+
+    def __init__(self, prefix, every: int = 1):
+        self.prefix = Path(prefix)
+        if int(every) < 1:
+            raise ValueError("VTUWriter: every must be at least 1")
+        self.every = int(every)
+        self.prefix.parent.mkdir(parents=True, exist_ok=True)
+        self._entries: list[tuple[float, str]] = []
+        self._seen = 0
+
+    @property
+    def pvd_path(self) -> Path:
+        return self.prefix.with_name(self.prefix.name + ".pvd")
+
+    @property
+    def files(self) -> list[Path]:
+        """The .vtu files written so far."""
+        return [self.prefix.parent / name for _, name in self._entries]
+
+    def write(self, frame: Frame) -> None:
+        """Write one frame (called by the simulation at every recorded step)."""
+        self._seen += 1
+        if (self._seen - 1) % self.every:
+            return
+        name = f"{self.prefix.name}_{len(self._entries):05d}.vtu"
+        mesh = frame_to_mesh(frame)
+        path = self.prefix.parent / name
+        tmp = path.with_name(path.name + ".tmp.vtu")
+        meshio.write(tmp, mesh, file_format="vtu")
+        os.replace(tmp, path)
+        self._entries.append((frame.time, name))
+        if len(self._entries) % 50 == 1:
+            self._write_pvd()
+
+    def close(self) -> None:
+        """Write the .pvd index of every file written."""
+        self._write_pvd()
+
+    def _write_pvd(self):
+        lines = ['<?xml version="1.0"?>',
+                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+                 "  <Collection>"]
+        for t, name in self._entries:
+            lines.append(
+                f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(name)}/>'
+            )
+        lines += ["  </Collection>", "</VTKFile>", ""]
+        tmp = self.pvd_path.with_name(self.pvd_path.name + ".tmp")
+        tmp.write_text("\n".join(lines))
+        os.replace(tmp, self.pvd_path)
+
+
+def frame_to_mesh(frame: Frame) -> meshio.Mesh:
+    """The meshio mesh of one frame (block cells grouped by vertex count, then contacts)."""
+    offsets = frame.offsets
+    counts = np.diff(offsets)
+    n_vertices = len(frame.vertices)
+    n_contacts = len(frame.contact_point)
+    points = _pad3(np.concatenate([frame.vertices, frame.contact_point]))
+    point_data = {
+        "displacement": _pad3(np.concatenate([frame.vertex_displacement,
+                                              np.zeros((n_contacts, 2))])),
+        "velocity": _pad3(np.concatenate([frame.vertex_velocity, np.zeros((n_contacts, 2))])),
+    }
+    cells = []
+    data = {k: [] for k in ("kind", "block_id", "displacement", "velocity", "rotation", "stress",
+                            "normal_force", "shear_force", "contact_state")}
+    for nv in np.unique(counts):
+        blocks = np.flatnonzero(counts == nv)
+        conn = offsets[blocks][:, None] + np.arange(nv)
+        cells.append(("polygon", conn))
+        nb = len(blocks)
+        nan = np.full(nb, np.nan)
+        data["kind"].append(np.zeros(nb))
+        data["block_id"].append(blocks.astype(float))
+        data["displacement"].append(_pad3(frame.displacement[blocks]))
+        data["velocity"].append(_pad3(frame.velocity[blocks, :2]))
+        data["rotation"].append(frame.rotation[blocks])
+        data["stress"].append(frame.stress[blocks])
+        data["normal_force"].append(nan)
+        data["shear_force"].append(nan)
+        data["contact_state"].append(nan)
+    if n_contacts:
+        cells.append(("vertex", (n_vertices + np.arange(n_contacts))[:, None]))
+        nan = np.full(n_contacts, np.nan)
+        data["kind"].append(np.ones(n_contacts))
+        data["block_id"].append(np.full(n_contacts, -1.0))
+        data["displacement"].append(np.full((n_contacts, 3), np.nan))
+        data["velocity"].append(np.full((n_contacts, 3), np.nan))
+        data["rotation"].append(nan)
+        data["stress"].append(np.full((n_contacts, 3), np.nan))
+        data["normal_force"].append(frame.normal_force.astype(float))
+        data["shear_force"].append(frame.shear_force.astype(float))
+        data["contact_state"].append(frame.contact_state.astype(float))
+    return meshio.Mesh(points, cells, point_data=point_data, cell_data=data)

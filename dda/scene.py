@@ -1,0 +1,325 @@
+"""Scene: the blocks, their materials, the joints and the effects, each input checked."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dda import geometry
+from dda._checks import finite_number, finite_vector
+from dda.contact.joint import JointMaterial
+from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
+from dda.materials import LinearElastic
+
+__all__ = ["Block", "Scene"]
+
+
+@dataclass(frozen=True)
+class Block:
+    """A light handle on one block of a scene: its index and its name."""
+
+    index: int
+    name: str
+
+    def __str__(self):
+        return f"block {self.name!r}"
+
+
+@dataclass
+class _BlockInput:
+    vertices: np.ndarray
+    material: LinearElastic
+    fixed: bool
+    velocity: np.ndarray
+    angular_velocity: float
+
+
+@dataclass
+class _PointLoad:
+    block: int
+    point: np.ndarray
+    force: LoadHistory
+
+
+@dataclass
+class _Motion:
+    block: int
+    displacement: DisplacementHistory
+    penalty: float | None
+
+
+@dataclass
+class _Shake:
+    block: int
+    history: AccelerationHistory
+
+
+@dataclass
+class _Joints:
+    default: JointMaterial | None = None
+    pairs: dict[tuple[int, int], JointMaterial] = field(default_factory=dict)
+
+
+class Scene:
+    """Blocks, materials, joints and effects of one DDA model.
+
+    Parameters
+    ----------
+    gravity : float or None
+        Acceleration of gravity in m/s^2, acting in -y. None or 0 means no gravity effect.
+
+    Examples
+    --------
+    >>> from dda import Scene
+    >>> from dda.materials import LinearElastic
+    >>> rock = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
+    >>> scene = Scene(gravity=9.81)
+    >>> base = scene.add_block([(0, 0), (1, 0), (1, 0.2), (0, 0.2)], rock, fixed=True)
+    >>> base
+    Block(index=0, name='block0')
+    """
+
+    def __init__(self, gravity: float | None = None):
+        g = 0.0 if gravity is None else finite_number("gravity", gravity, where="Scene")
+        self.gravity = g
+        self._blocks: list[_BlockInput] = []
+        self._handles: list[Block] = []
+        self._loads: list[_PointLoad] = []
+        self._motions: list[_Motion] = []
+        self._shakes: list[_Shake] = []
+        self._joints = _Joints()
+
+    # ------------------------------------------------------------------ blocks
+    @property
+    def blocks(self) -> list[Block]:
+        """Handles of every block in the order they were added."""
+        return list(self._handles)
+
+    def block(self, key) -> Block:
+        """The handle of a block given by handle, name or index."""
+        if isinstance(key, Block):
+            if key.index >= len(self._handles) or self._handles[key.index] != key:
+                raise ValueError(f"{key} does not belong to this scene")
+            return key
+        if isinstance(key, (int, np.integer)):
+            if not 0 <= key < len(self._handles):
+                raise ValueError(f"no block with index {key} (the scene has {len(self._handles)})")
+            return self._handles[int(key)]
+        for h in self._handles:
+            if h.name == key:
+                return h
+        raise ValueError(f"no block named {key!r}")
+
+    def add_block(
+        self,
+        vertices,
+        material: LinearElastic,
+        fixed: bool = False,
+        name: str | None = None,
+        velocity=(0.0, 0.0),
+        angular_velocity: float = 0.0,
+    ) -> Block:
+        """Add a polygonal block.
+
+        Parameters
+        ----------
+        vertices : (n, 2) array-like
+            Corners of a simple polygon (convex or not), counter-clockwise, n >= 3, in metres.
+        material : LinearElastic
+        fixed : bool
+            A fixed block does not move and carries no unknowns.
+        name : str, optional
+            Defaults to ``"block<index>"``; names must be unique.
+        velocity : (vx, vy)
+            Initial velocity of the block's centroid (m/s).
+        angular_velocity : float
+            Initial angular velocity about the centroid (rad/s, counter-clockwise positive).
+        """
+        index = len(self._blocks)
+        name = f"block{index}" if name is None else str(name)
+        if any(h.name == name for h in self._handles):
+            raise ValueError(f"a block named {name!r} exists already; block names must be unique")
+        where = f"block {name!r}"
+        try:
+            v = np.array(vertices, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{where}: vertices must be an (n, 2) array of numbers") from None
+        if v.ndim != 2 or v.shape[1] != 2 or len(v) < 3:
+            raise ValueError(
+                f"{where}: vertices must be an (n, 2) array with n >= 3, got {v.shape}"
+            )
+        if not np.all(np.isfinite(v)):
+            raise ValueError(f"{where}: vertices contain NaN or inf")
+        if np.array_equal(v[0], v[-1]):
+            v = v[:-1]  # a closed ring given with its first point repeated
+        edges = np.roll(v, -1, axis=0) - v
+        lengths = np.hypot(edges[:, 0], edges[:, 1])
+        size = np.ptp(v, axis=0).max()
+        if np.any(lengths <= 1e-12 * size) or len(v) < 3:
+            i = int(np.argmin(lengths))
+            raise ValueError(f"{where}: vertices {i} and {(i + 1) % len(v)} coincide")
+        area = geometry.signed_areas(v, np.array([0, len(v)]))[0]
+        if abs(area) <= 1e-14 * size * size:
+            raise ValueError(f"{where}: the polygon has zero area")
+        crossings = geometry.self_intersections(v)
+        if crossings:
+            i, j = crossings[0]
+            raise ValueError(
+                f"{where}: the polygon is self-intersecting (edge {i}-{(i + 1) % len(v)} meets "
+                f"edge {j}-{(j + 1) % len(v)})"
+            )
+        if area < 0:
+            raise ValueError(
+                f"{where}: the vertices are clockwise; give them counter-clockwise (reverse them)"
+            )
+        if not isinstance(material, LinearElastic):
+            raise TypeError(f"{where}: material must be a LinearElastic, got {material!r}")
+        vel = finite_vector("velocity", velocity, where=where)
+        omega = finite_number("angular_velocity", angular_velocity, where=where)
+        self._blocks.append(_BlockInput(v, material, bool(fixed), vel, omega))
+        handle = Block(index, name)
+        self._handles.append(handle)
+        return handle
+
+    # ------------------------------------------------------------------ joints
+    def set_joint(self, joint: JointMaterial, between=None):
+        """Set the default joint, or the joint between one pair of blocks.
+
+        Parameters
+        ----------
+        joint : JointMaterial
+        between : (block, block), optional
+            Two blocks (handles, names or indices); without it the joint is the scene default.
+        """
+        if not isinstance(joint, JointMaterial):
+            raise TypeError(f"set_joint: joint must be a JointMaterial, got {joint!r}")
+        if between is None:
+            self._joints.default = joint
+            return
+        try:
+            a, b = between
+        except (TypeError, ValueError):
+            raise ValueError("set_joint: between must be a pair of blocks") from None
+        a, b = self.block(a), self.block(b)
+        if a == b:
+            raise ValueError(f"set_joint: between names {a} twice")
+        self._joints.pairs[(min(a.index, b.index), max(a.index, b.index))] = joint
+
+    # ------------------------------------------------------------------ effects
+    def _movable(self, block, what: str) -> Block:
+        h = self.block(block)
+        if self._blocks[h.index].fixed:
+            raise ValueError(f"{what}: {h} is fixed; it cannot also move")
+        if any(s.block == h.index for s in self._shakes) or any(
+            m.block == h.index for m in self._motions
+        ):
+            raise ValueError(f"{what}: {h} has a prescribed motion already")
+        return h
+
+    def shake(self, block, acceleration, times=None) -> None:
+        """Make a block follow an acceleration history from rest (a shaking table).
+
+        The block translates rigidly (no rotation, no strain) and carries no unknowns.
+
+        Parameters
+        ----------
+        block : Block, name or index
+        acceleration : callable or array-like
+            A callable ``t -> (ax, ay)`` in m/s^2, or sampled values ((n,) for x only, or
+            (n, 2)) at ``times``, or a pair ``(times, values)``. Records are piecewise linear.
+        times : array-like, optional
+            Sample times of a recorded accelerogram (s), increasing, starting at or after 0.
+        """
+        h = self._movable(block, "shake")
+        hist = AccelerationHistory(acceleration, times, name=f"shake of {h}")
+        self._shakes.append(_Shake(h.index, hist))
+
+    def prescribe_motion(self, block, displacement, penalty: float | None = None) -> None:
+        """Prescribe the displacement of every vertex of a block.
+
+        Parameters
+        ----------
+        block : Block, name or index
+        displacement : callable
+            ``t -> (ux, uy)`` in metres from the start, zero at t = 0; None in a direction
+            leaves that direction free. With both given the block translates as prescribed and
+            carries no unknowns; with one None, penalty springs hold the other direction.
+        penalty : float, optional
+            Spring stiffness (N/m) of a partial constraint; default 100 x the largest Young's
+            modulus x 1 m.
+        """
+        h = self._movable(block, "prescribe_motion")
+        hist = DisplacementHistory(displacement, name=f"prescribe_motion of {h}")
+        if penalty is not None:
+            penalty = finite_number("penalty", penalty, positive=True, where="prescribe_motion")
+        self._motions.append(_Motion(h.index, hist, penalty))
+
+    def add_point_load(self, block, point, force) -> None:
+        """Apply a point force (N per m of thickness) at a material point of a block.
+
+        Parameters
+        ----------
+        block : Block, name or index
+        point : (x, y)
+            Where the force acts at the start; the point then moves with the block.
+        force : (fx, fy) or callable ``t -> (fx, fy)``
+        """
+        h = self.block(block)
+        p = finite_vector("point", point, where=f"point load on {h}")
+        self._loads.append(_PointLoad(h.index, p, LoadHistory(force, name=f"point load on {h}")))
+
+    # ------------------------------------------------------------------ checks
+    def joint_for(self, a: int, b: int) -> JointMaterial:
+        """The joint between blocks a and b (the pair's, or the default)."""
+        key = (min(a, b), max(a, b))
+        joint = self._joints.pairs.get(key, self._joints.default)
+        if joint is None:
+            raise ValueError(
+                f"no joint between {self._handles[a]} and {self._handles[b]}: call "
+                "scene.set_joint(JointMaterial(...)) for a default"
+            )
+        return joint
+
+    def validate(self) -> None:
+        """Check the scene as a whole: blocks present, no overlap at the start, joints set."""
+        if not self._blocks:
+            raise ValueError("the scene has no blocks")
+        if len(self._blocks) > 1 and self._joints.default is None:
+            # every pair that can touch needs a joint; without a default, all pairs must be set
+            n = len(self._blocks)
+            if len(self._joints.pairs) < n * (n - 1) // 2:
+                raise ValueError(
+                    "the scene has no default joint: call scene.set_joint(JointMaterial(...))"
+                )
+        from dda.contact.detection import find_overlaps
+
+        verts, offsets = self.vertex_arrays()
+        bad = find_overlaps(verts, offsets)
+        if bad:
+            a, b = bad[0]
+            raise ValueError(
+                f"{self._handles[a]} and {self._handles[b]} overlap at the start; blocks may "
+                "touch but not overlap"
+            )
+
+    def vertex_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """All vertices stacked (n_vertices, 2) and the CSR offsets of the blocks."""
+        counts = [len(b.vertices) for b in self._blocks]
+        offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        verts = np.concatenate([b.vertices for b in self._blocks]) if self._blocks else np.zeros(
+            (0, 2)
+        )
+        return verts, offsets
+
+    def __repr__(self):
+        effects = []
+        if self.gravity:
+            effects.append(f"gravity={self.gravity}")
+        if self._shakes:
+            effects.append(f"{len(self._shakes)} shaken")
+        if self._motions:
+            effects.append(f"{len(self._motions)} prescribed")
+        if self._loads:
+            effects.append(f"{len(self._loads)} point loads")
+        return f"Scene({len(self._blocks)} blocks{', ' if effects else ''}{', '.join(effects)})"

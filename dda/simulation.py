@@ -1,0 +1,501 @@
+"""Simulation: the step loop, OPEN-CLOSE through a solver, commit/revert, adaptive dt, recorders.
+
+Every step is built from the committed state (blocks and contacts) into a trial; the trial is
+committed only when the solver has converged, otherwise it is dropped and the step is tried
+again with half the step size. All work inside a step is on arrays over blocks and contacts.
+"""
+
+from __future__ import annotations
+
+import sys
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+
+from dda import geometry
+from dda._checks import finite_number
+from dda.contact.contacts import OPEN, ContactSet, carry_over
+from dda.contact.detection import VertexTopology, narrow_phase
+from dda.contact.element import ContactElement, LawGroups
+from dda.result import Frame, Result
+from dda.scene import Scene
+from dda.solvers.base import NonlinearSolver, StepProblem
+from dda.solvers.legacy import LegacyPullBack
+from dda.solvers.newmark import effective_system, updated_velocity
+
+__all__ = ["Simulation", "SimulationError"]
+
+# a step is cut at most this many times in a row before the run stops
+MAX_CUTS = 12
+# after this many good steps in a row a cut step size is doubled again
+GROW_AFTER = 8
+# the search distance is this multiple of the step's predicted largest vertex displacement
+SEARCH_FACTOR = 2.5
+
+
+class SimulationError(RuntimeError):
+    """A run that cannot go on; ``result`` holds the steps done before."""
+
+    def __init__(self, message, result=None):
+        super().__init__(message)
+        self.result = result
+
+
+@dataclass
+class _Committed:
+    """The committed state of the blocks and contacts at one time."""
+
+    time: float
+    x: np.ndarray
+    velocity: np.ndarray
+    stress: np.ndarray
+    rotation: np.ndarray
+    contacts: ContactSet
+    load_points: np.ndarray
+    known_u: np.ndarray
+    last_move: float
+
+
+class Simulation:
+    """A DDA run of a scene.
+
+    Parameters
+    ----------
+    scene : Scene
+    dt : float
+        Step size (s). Steps are cut when a step does not converge and grow back afterwards.
+    solver : NonlinearSolver, optional
+        How one step is solved; ``LegacyPullBack()`` by default.
+    analysis : {"dynamic", "static"}
+        "static" sets the velocity to zero at the start of every step (METHOD.md section 2).
+    velocity_carry : float
+        Fraction in [0, 1] of the velocity carried into the next step (1: fully dynamic).
+    max_open_close : int
+        OPEN-CLOSE passes allowed before the step is cut.
+    record_every : int
+        Record (and write) every this many steps.
+    output : writer, optional
+        For example ``dda.io.VTUWriter("out/case")``; can also be given to :meth:`run`.
+
+    Examples
+    --------
+    >>> import dda
+    >>> from dda.materials import LinearElastic
+    >>> scene = dda.Scene(gravity=9.81)
+    >>> b = scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)],
+    ...                     LinearElastic(young=1e9, poisson=0.2, density=1000.0))
+    >>> result = dda.Simulation(scene, dt=0.01).run(duration=0.1)
+    >>> round(float(result.displacement(b)[-1, 1]), 6)  # -g t^2 / 2
+    -0.04905
+    """
+
+    def __init__(self, scene: Scene, dt: float, solver: NonlinearSolver | None = None,
+                 analysis: str = "dynamic", velocity_carry: float = 1.0,
+                 max_open_close: int = 12, record_every: int = 1, output=None):
+        if not isinstance(scene, Scene):
+            raise TypeError(f"Simulation: scene must be a dda.Scene, got {scene!r}")
+        self.dt = finite_number("dt", dt, positive=True, where="Simulation")
+        if solver is None:
+            solver = LegacyPullBack()
+        if not isinstance(solver, NonlinearSolver):
+            raise TypeError(f"Simulation: solver must be a NonlinearSolver, got {solver!r}")
+        if analysis not in ("dynamic", "static"):
+            raise ValueError(
+                f"Simulation: analysis must be 'dynamic' or 'static', got {analysis!r}"
+            )
+        carry = finite_number("velocity_carry", velocity_carry, where="Simulation")
+        if not 0.0 <= carry <= 1.0:
+            raise ValueError(f"Simulation: velocity_carry must lie in [0, 1], got {carry}")
+        if int(max_open_close) < 1:
+            raise ValueError("Simulation: max_open_close must be at least 1")
+        if int(record_every) < 1:
+            raise ValueError("Simulation: record_every must be at least 1")
+        scene.validate()
+        self.scene = scene
+        self.solver = solver
+        self.analysis = analysis
+        self.velocity_carry = 0.0 if analysis == "static" else carry
+        self.max_open_close = int(max_open_close)
+        self.record_every = int(record_every)
+        self.output = output
+        self._setup()
+
+    # ------------------------------------------------------------------ setup
+    def _setup(self):
+        sc = self.scene
+        blocks = sc._blocks
+        nb = len(blocks)
+        self.n_blocks = nb
+        x0, offsets = sc.vertex_arrays()
+        self.offsets = offsets
+        self.topo = VertexTopology.from_offsets(offsets)
+        self.x_initial = x0.copy()
+        ints = geometry.polygon_integrals(x0, offsets)
+        self.centroid_initial = ints.centroid.copy()
+        self.size = np.sqrt(ints.area)  # a length scale per block
+        self.density = np.array([b.material.density for b in blocks])
+        self.elasticity = np.stack([b.material.elasticity() for b in blocks])
+        young = np.array([b.material.young for b in blocks])
+
+        # blocks whose motion is known carry no unknowns
+        self.free = np.array([not b.fixed for b in blocks])
+        self.shakes = list(sc._shakes)
+        full = [m for m in sc._motions if m.displacement.mask.all()]
+        self.partial = [m for m in sc._motions if not m.displacement.mask.all()]
+        self.full_motions = full
+        for s in self.shakes:
+            self.free[s.block] = False
+        for m in full:
+            self.free[m.block] = False
+        self.constraint_penalty = 100.0 * young.max()
+
+        # joints: one table of unique joints, a default and sorted per-pair overrides
+        joints, index_of = [], {}
+
+        def joint_id(j):
+            if id(j) not in index_of:
+                index_of[id(j)] = len(joints)
+                joints.append(j)
+            return index_of[id(j)]
+
+        default = sc._joints.default
+        self.default_joint = joint_id(default) if default is not None else -1
+        keys = np.array([a * nb + b for (a, b) in sc._joints.pairs], dtype=np.int64)
+        ids = np.array([joint_id(j) for j in sc._joints.pairs.values()], dtype=np.int64)
+        order = np.argsort(keys)
+        self.pair_keys, self.pair_joint = keys[order], ids[order]
+        laws, law_of = [], {}
+        for j in joints:
+            if id(j.friction) not in law_of:
+                law_of[id(j.friction)] = len(laws)
+                laws.append(j.friction)
+        self.laws = laws
+        self.joint_pn = np.array([j.normal_penalty for j in joints], dtype=float)
+        self.joint_ps = np.array([j.shear_penalty for j in joints], dtype=float)
+        self.joint_law = np.array([law_of[id(j.friction)] for j in joints], dtype=np.int64)
+        fields = {"g_se": 0.0, "slip": 0.0}  # every law keeps these (FrictionLaw)
+        for law in laws:
+            fields.update(law.history_fields())
+        self.history_fields = fields
+
+        # initial state
+        vel = np.zeros((nb, 6))
+        for i, b in enumerate(blocks):
+            vel[i, :2] = b.velocity
+            vel[i, 2] = b.angular_velocity
+        vel[~self.free] = 0.0
+        loads = np.array([ld.point for ld in sc._loads]).reshape(-1, 2)
+        self.load_block = np.array([ld.block for ld in sc._loads], dtype=np.int64)
+        self.state = _Committed(
+            time=0.0, x=x0.copy(), velocity=vel, stress=np.zeros((nb, 3)),
+            rotation=np.zeros(nb), contacts=ContactSet.empty(fields), load_points=loads,
+            known_u=np.zeros((nb, 2)), last_move=0.0,
+        )
+        self._steps_done = 0
+        self._dt_now = self.dt
+        self._good_steps = 0
+
+    # ------------------------------------------------------------------ helpers
+    def _joint_index(self, bj, bk):
+        key = np.minimum(bj, bk) * self.n_blocks + np.maximum(bj, bk)
+        out = np.full(len(key), self.default_joint, dtype=np.int64)
+        if len(self.pair_keys):
+            pos = np.clip(np.searchsorted(self.pair_keys, key), 0, len(self.pair_keys) - 1)
+            hit = self.pair_keys[pos] == key
+            out[hit] = self.pair_joint[pos[hit]]
+        return out
+
+    def _known_motion(self, t1):
+        """Known translation at t1 and velocity of every block whose motion is prescribed."""
+        u = self.state.known_u.copy()
+        v = np.zeros((self.n_blocks, 2))
+        for s in self.shakes:
+            u[s.block], v[s.block] = s.history.state(t1)
+        for m in self.full_motions:
+            u[m.block] = m.displacement(t1)
+        return u, v
+
+    def _block_forces(self, t1, ints, centroid):
+        """Block stiffness, mass and external forces (METHOD.md section 1), (nb, 6[, 6])."""
+        st = self.state
+        nb = self.n_blocks
+        k = geometry.stiffness_matrices(ints.area, self.elasticity)
+        m = geometry.mass_matrices(ints, self.density)
+        f = np.zeros((nb, 6))
+        if self.scene.gravity:
+            f[:, 1] -= self.scene.gravity * self.density * ints.area
+        f[:, 3:] -= ints.area[:, None] * st.stress
+        if len(self.load_block):
+            forces = np.array([ld.force(t1) for ld in self.scene._loads])
+            t = geometry.t_matrix(st.load_points, centroid[self.load_block])
+            np.add.at(f, self.load_block, np.einsum("lij,li->lj", t, forces))
+        for mo in self.partial:
+            # penalty springs on every vertex of the block in the constrained direction(s)
+            sl = slice(self.offsets[mo.block], self.offsets[mo.block + 1])
+            xv = st.x[sl]
+            t = geometry.t_matrix(xv, np.repeat(centroid[mo.block][None], len(xv), axis=0))
+            mask = mo.displacement.mask.astype(float)
+            p = mo.penalty or self.constraint_penalty
+            target = self.x_initial[sl] + mo.displacement(t1) - xv
+            tm = t * mask[None, :, None]
+            k[mo.block] += p * np.einsum("vij,vik->jk", tm, tm)
+            f[mo.block] += p * np.einsum("vij,vi->j", tm, target * mask)
+        return k, m, f
+
+    def _search_distance(self, dt, centroid, known_du):
+        st = self.state
+        t = geometry.t_matrix(st.x, centroid[self.topo.block])
+        vv = np.einsum("vij,vj->vi", t, st.velocity[self.topo.block] * self.velocity_carry)
+        predicted = np.max(np.hypot(vv[:, 0], vv[:, 1])) * dt if len(vv) else 0.0
+        predicted += 0.5 * abs(self.scene.gravity) * dt * dt
+        if len(known_du):
+            predicted = max(predicted, float(np.max(np.hypot(known_du[:, 0], known_du[:, 1]))))
+        floor = 1e-6 * float(np.min(self.size))
+        return SEARCH_FACTOR * max(predicted, st.last_move) + floor
+
+    # ------------------------------------------------------------------ one step
+    def _try_step(self, dt):
+        """Build the step's problem from the committed state and solve it (no commit)."""
+        st = self.state
+        t1 = st.time + dt
+        ints = geometry.polygon_integrals(st.x, self.offsets)
+        centroid = ints.centroid
+        k, m, f = self._block_forces(t1, ints, centroid)
+        v_eff = st.velocity * self.velocity_carry
+        k_eff, f_eff = effective_system(k, m, f, v_eff, dt)
+
+        known_u, known_v = self._known_motion(t1)
+        d_known = np.zeros((self.n_blocks, 6))
+        d_known[:, :2] = known_u - st.known_u
+        d_known[self.free] = 0.0
+
+        d0 = self._search_distance(dt, centroid, d_known[~self.free, :2])
+        pen_limit = max(2.0 * d0, 1e-3 * float(np.min(self.size)))
+        cand = narrow_phase(st.x, self.topo, d0, pen_limit)
+        contacts, fresh = carry_over(st.contacts, cand, st.x, self.topo.nxt, self.topo.prv,
+                                     self.n_blocks)
+        joint = self._joint_index(contacts.bj, contacts.bk)
+        if np.any(joint < 0):
+            i = int(np.flatnonzero(joint < 0)[0])
+            raise SimulationError(
+                f"no joint between {self.scene.blocks[contacts.bj[i]]} and "
+                f"{self.scene.blocks[contacts.bk[i]]}; set a default joint"
+            )
+        laws = LawGroups.build(self.joint_law[joint], self.laws)
+        laws.initial_history(contacts.history, fresh)
+        element = ContactElement(contacts, st.x, centroid, self.topo.nxt, self.topo.prv,
+                                 self.joint_pn[joint], self.joint_ps[joint], laws)
+        problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=self.free,
+                              d_known=d_known, element=element,
+                              max_open_close=self.max_open_close)
+        sol = self.solver.solve_step(problem)
+        if not sol.converged:
+            return None, sol
+        d = sol.d
+        move = geometry.vertex_displacements(st.x, centroid[self.topo.block], d[self.topo.block])
+        largest = float(np.max(np.hypot(move[:, 0], move[:, 1])))
+        if largest > d0:
+            sol.converged = False
+            sol.reason = (f"a vertex moved {largest:.3g} m, beyond the contact search distance "
+                          f"{d0:.3g} m")
+            return None, sol
+        vel = np.where(self.free[:, None], updated_velocity(d, v_eff, dt), 0.0)
+        vel[~self.free, :2] = known_v[~self.free]
+        for mo in self.full_motions:
+            vel[mo.block, :2] = d_known[mo.block, :2] / dt
+        stress = st.stress + np.where(
+            self.free[:, None], np.einsum("bij,bj->bi", self.elasticity, d[:, 3:]), 0.0
+        )
+        load_points = st.load_points
+        if len(self.load_block):
+            load_points = load_points + geometry.vertex_displacements(
+                load_points, centroid[self.load_block], d[self.load_block])
+        new = _Committed(
+            time=t1, x=st.x + move, velocity=vel, stress=stress,
+            rotation=st.rotation + d[:, 2], contacts=sol.contacts, load_points=load_points,
+            known_u=known_u, last_move=largest,
+        )
+        return new, sol
+
+    def _snapshots(self):
+        return [s.history.snapshot() for s in self.shakes]
+
+    def _restore(self, snaps):
+        for s, snap in zip(self.shakes, snaps, strict=True):
+            s.history.restore(snap)
+
+    # ------------------------------------------------------------------ run
+    def run(self, duration: float, output=None, progress: bool | None = None) -> Result:
+        """Run the simulation for ``duration`` seconds from where it stands.
+
+        Parameters
+        ----------
+        duration : float
+            Simulated time to add (s).
+        output : writer, optional
+            Overrides the writer given to the constructor for this run.
+        progress : bool, optional
+            Show a progress bar on stderr; by default on for runs of more than 2,000 steps
+            when stderr is a terminal.
+
+        Returns
+        -------
+        Result
+            The recorded steps of this run, starting with the state it started from.
+
+        Raises
+        ------
+        SimulationError
+            When a step cannot be made to converge even with a much smaller dt; its
+            ``result`` holds the steps done before (and the writer has written them).
+        """
+        duration = finite_number("duration", duration, positive=True, where="run")
+        t_end = self.state.time + duration
+        for s in self.shakes:
+            s.history.check_covers(t_end)
+        writer = output if output is not None else self.output
+        n_steps = int(np.ceil(duration / self.dt - 1e-9))
+        if progress is None:
+            progress = n_steps > 2000 and sys.stderr.isatty()
+        bar = _Progress(t_end, self.state.time) if progress else None
+        result = Result(self.scene, [b.name for b in self.scene.blocks])
+        self._record(result, writer)
+        since_record = 0
+        try:
+            while self.state.time < t_end - 1e-12 * max(1.0, t_end):
+                self._advance(result, t_end)
+                since_record += 1
+                last = self.state.time >= t_end - 1e-12 * max(1.0, t_end)
+                if since_record >= self.record_every or last:
+                    self._record(result, writer)
+                    since_record = 0
+                if bar:
+                    bar.update(self.state.time)
+        except SimulationError as exc:
+            exc.result = result
+            raise
+        finally:
+            if bar:
+                bar.close()
+            if writer is not None:
+                writer.close()
+        return result
+
+    def _advance(self, result, t_end):
+        """Take one step, cutting dt as often as needed; commit it and log its stats."""
+        tries = 0
+        start = _time.perf_counter()
+        while True:
+            dt = min(self._dt_now, t_end - self.state.time)
+            snaps = self._snapshots()
+            new, sol = self._try_step(dt)
+            if new is not None:
+                break
+            self._restore(snaps)
+            tries += 1
+            result.stats.cuts.append((self.state.time, dt, sol.reason))
+            self._dt_now = dt / 2.0
+            self._good_steps = 0
+            if tries > MAX_CUTS:
+                raise SimulationError(
+                    f"the run cannot go on at t = {self.state.time:.6g} s: {sol.reason} "
+                    f"(step cut {tries} times down to dt = {dt:.3g} s)"
+                )
+        self.state = new
+        self._steps_done += 1
+        self._good_steps += 1
+        if self._dt_now < self.dt and self._good_steps >= GROW_AFTER:
+            self._dt_now = min(self.dt, 2.0 * self._dt_now)
+            self._good_steps = 0
+        c = new.contacts
+        result.stats.append(
+            time=new.time, dt=dt, iterations=sol.iterations,
+            open_close_passes=sol.open_close_passes, contacts=len(c),
+            closed=int(np.count_nonzero(c.state != OPEN)), retries=tries,
+            wall_time=_time.perf_counter() - start,
+        )
+
+    # ------------------------------------------------------------------ recording
+    def frame(self) -> Frame:
+        """The committed state as a :class:`dda.result.Frame`."""
+        st = self.state
+        ints = geometry.polygon_integrals(st.x, self.offsets)
+        blk = self.topo.block
+        t = geometry.t_matrix(st.x, ints.centroid[blk])
+        vv = np.einsum("vij,vj->vi", t, st.velocity[blk])
+        c = st.contacts
+        closed = c.state != OPEN
+        if len(c):
+            from dda.contact.kinematics import contact_geometry
+
+            g = contact_geometry(st.x, c.vertex, c.edge, self.topo.nxt)
+            point, normal = g.p1, g.normal
+        else:
+            point = normal = np.zeros((0, 2))
+        return Frame(
+            time=st.time, vertices=st.x.copy(), offsets=self.offsets,
+            vertex_displacement=st.x - self.x_initial, vertex_velocity=vv,
+            displacement=ints.centroid - self.centroid_initial, velocity=st.velocity.copy(),
+            rotation=st.rotation.copy(), stress=st.stress.copy(),
+            contact_point=point[closed], contact_normal=normal[closed],
+            contact_blocks=np.stack([c.bj, c.bk], axis=1)[closed],
+            normal_force=-c.t_n[closed], shear_force=c.t_s[closed],
+            contact_state=c.state[closed].astype(np.int64),
+        )
+
+    def _pair_forces(self):
+        """Per block pair: key, total force on the higher-index block, weighted normal."""
+        c = self.state.contacts
+        closed = np.flatnonzero(c.state != OPEN)
+        if len(closed) == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2))
+        from dda.contact.kinematics import contact_geometry
+
+        g = contact_geometry(self.state.x, c.vertex[closed], c.edge[closed], self.topo.nxt)
+        bj, bk = c.bj[closed], c.bk[closed]
+        t_n, t_s = c.t_n[closed], c.t_s[closed]
+        on_j = -(t_n[:, None] * g.normal + t_s[:, None] * g.tau)
+        j_high = bj > bk
+        sign = np.where(j_high, 1.0, -1.0)[:, None]
+        force = sign * on_j
+        normal = sign * g.normal * np.abs(t_n)[:, None]
+        key = np.minimum(bj, bk) * self.n_blocks + np.maximum(bj, bk)
+        keys, inv = np.unique(key, return_inverse=True)
+        f = np.zeros((len(keys), 2))
+        n = np.zeros((len(keys), 2))
+        np.add.at(f, inv, force)
+        np.add.at(n, inv, normal)
+        return keys, f, n
+
+    def _record(self, result, writer):
+        frame = self.frame()
+        keys, f, n = self._pair_forces()
+        result.record(frame, keys, f, n)
+        if writer is not None:
+            writer.write(frame)
+            result.frames_written += 1
+
+
+class _Progress:
+    """A minimal progress bar on stderr (no dependency)."""
+
+    def __init__(self, t_end, t_start):
+        self.t_end, self.t_start = t_end, t_start
+        self.start = _time.perf_counter()
+        self.last = 0.0
+
+    def update(self, t):
+        now = _time.perf_counter()
+        if now - self.last < 0.2 and t < self.t_end:
+            return
+        self.last = now
+        frac = (t - self.t_start) / (self.t_end - self.t_start)
+        bar = "#" * int(30 * frac)
+        eta = (now - self.start) * (1 - frac) / max(frac, 1e-9)
+        sys.stderr.write(f"\r  t = {t:9.4f} s [{bar:<30}] {100 * frac:5.1f}%  eta {eta:6.1f} s")
+        sys.stderr.flush()
+
+    def close(self):
+        sys.stderr.write("\n")
+        sys.stderr.flush()

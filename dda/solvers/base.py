@@ -1,0 +1,71 @@
+"""The strategy interface that solves one time step, and what goes in and out of it.
+
+The simulation owns the loop over steps, commit and revert; a solver only turns one
+:class:`StepProblem` (built from the committed state) into a :class:`StepSolution` (a trial the
+simulation commits when it has converged).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from dda.contact.contacts import ContactSet
+from dda.contact.element import ContactElement
+
+__all__ = ["NonlinearSolver", "StepProblem", "StepSolution"]
+
+
+@dataclass
+class StepProblem:
+    """Everything a solver needs for one step, all built from the committed state.
+
+    Attributes
+    ----------
+    dt : step size
+    block_k, block_f : (n_blocks, 6, 6) and (n_blocks, 6) effective block matrices and forces
+        (stiffness, Newmark inertia, constraints, loads), contacts excluded
+    free : (n_blocks,) bool, the blocks that carry unknowns
+    d_known : (n_blocks, 6) known increments of the other blocks
+    element : ContactElement of the step's contacts
+    max_open_close : limit of OPEN-CLOSE passes before the step is declared failed
+    """
+
+    dt: float
+    block_k: np.ndarray
+    block_f: np.ndarray
+    free: np.ndarray
+    d_known: np.ndarray
+    element: ContactElement
+    max_open_close: int = 12
+
+
+@dataclass
+class StepSolution:
+    """A solver's trial for one step.
+
+    ``converged`` False means the step must be reverted and retried (``reason`` says why).
+    """
+
+    d: np.ndarray | None
+    contacts: ContactSet | None
+    converged: bool
+    open_close_passes: int = 0
+    iterations: int = 0
+    reason: str = ""
+    residual_norms: list[float] = field(default_factory=list)
+
+
+class NonlinearSolver(ABC):
+    """A strategy that solves one time step (DESIGN.md: LegacyPullBack, NewtonRaphson)."""
+
+    name = "solver"
+
+    @abstractmethod
+    def solve_step(self, problem: StepProblem) -> StepSolution:
+        """Solve one step from the committed state; never modify the problem's arrays."""
+
+    def __repr__(self):
+        return f"{type(self).__name__}()"

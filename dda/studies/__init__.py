@@ -1,0 +1,1 @@
+"""Studies: sweeps and analytical reference solutions."""
