@@ -128,7 +128,8 @@ class Scene:
             Corners of a simple polygon (convex or not), counter-clockwise, n >= 3, in metres.
         material : LinearElastic
         fixed : bool
-            A fixed block does not move and carries no unknowns.
+            A fixed block carries no unknowns: it stays put unless it is shaken or its motion
+            is prescribed in both directions.
         name : str, optional
             Defaults to ``"block<index>"``; names must be unique.
         velocity : (vx, vy)
@@ -159,9 +160,6 @@ class Scene:
         if np.any(lengths <= 1e-12 * size) or len(v) < 3:
             i = int(np.argmin(lengths))
             raise ValueError(f"{where}: vertices {i} and {(i + 1) % len(v)} coincide")
-        area = geometry.signed_areas(v, np.array([0, len(v)]))[0]
-        if abs(area) <= 1e-14 * size * size:
-            raise ValueError(f"{where}: the polygon has zero area")
         crossings = geometry.self_intersections(v)
         if crossings:
             i, j = crossings[0]
@@ -169,6 +167,9 @@ class Scene:
                 f"{where}: the polygon is self-intersecting (edge {i}-{(i + 1) % len(v)} meets "
                 f"edge {j}-{(j + 1) % len(v)})"
             )
+        area = geometry.signed_areas(v, np.array([0, len(v)]))[0]
+        if abs(area) <= 1e-14 * size * size:
+            raise ValueError(f"{where}: the polygon has zero area")
         if area < 0:
             raise ValueError(
                 f"{where}: the vertices are clockwise; give them counter-clockwise (reverse them)"
@@ -207,10 +208,12 @@ class Scene:
         self._joints.pairs[(min(a.index, b.index), max(a.index, b.index))] = joint
 
     # ------------------------------------------------------------------ effects
-    def _movable(self, block, what: str) -> Block:
+    def _movable(self, block, what: str, partial: bool = False) -> Block:
+        # a fixed block has a known motion (zero unless shaken or fully prescribed), so it may
+        # be shaken, but a partial constraint would leave a direction free
         h = self.block(block)
-        if self._blocks[h.index].fixed:
-            raise ValueError(f"{what}: {h} is fixed; it cannot also move")
+        if partial and self._blocks[h.index].fixed:
+            raise ValueError(f"{what}: {h} is fixed; it cannot have a direction left free")
         if any(s.block == h.index for s in self._shakes) or any(
             m.block == h.index for m in self._motions
         ):
@@ -249,8 +252,9 @@ class Scene:
             Spring stiffness (N/m) of a partial constraint; default 100 x the largest Young's
             modulus x 1 m.
         """
-        h = self._movable(block, "prescribe_motion")
+        h = self.block(block)
         hist = DisplacementHistory(displacement, name=f"prescribe_motion of {h}")
+        self._movable(h, "prescribe_motion", partial=not hist.mask.all())
         if penalty is not None:
             penalty = finite_number("penalty", penalty, positive=True, where="prescribe_motion")
         self._motions.append(_Motion(h.index, hist, penalty))

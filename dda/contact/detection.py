@@ -13,14 +13,17 @@ Rules of the narrow phase (METHOD.md section 3)
 -----------------------------------------------
 A vertex-edge pair is a contact candidate when
 1. the vertex is convex (a reflex vertex cannot touch an edge first);
-2. the foot of the perpendicular lies on the edge (0 <= xi <= 1 up to round-off);
+2. the foot of the perpendicular lies on the edge (0 <= xi <= 1 up to round-off), or the
+   vertex lies within the search distance of the edge's end vertex (vertex-vertex);
 3. the gap lies in ``[-penetration_limit, search_distance]``;
 4. the vertex is locally the first point of its block to cross the edge's line: both of its
    edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG``.
-Of several edges of one block that pass for the same vertex, the one whose outward normal is
-most opposed to the vertex's outward bisector is kept. A vertex-vertex case (the foot at the
+Of several edges of one block that pass for the same vertex, one whose foot lies on the edge
+is preferred, then the one whose outward normal is most opposed to the vertex's outward
+bisector. A vertex-vertex case (the foot at the
 end of the edge, the two vertices within the search distance) shows up as two mirrored pairs,
-P on an edge at Q and Q on an edge at P; only the better opposed one is kept.
+P on an edge at Q and Q on an edge at P; only one is kept: the one whose foot lies on its
+edge, else the better opposed one.
 """
 
 from __future__ import annotations
@@ -194,8 +197,11 @@ def narrow_phase(
     rel = p1 - p2
     gap = np.einsum("ij,ij->i", rel, normal)
     xi = np.einsum("ij,ij->i", rel, tau) / length
-    ok = (xi >= -_XI_TOL) & (xi <= 1.0 + _XI_TOL)
-    ok &= (gap <= search_distance) & (gap >= -penetration_limit)
+    on_edge = (xi >= -_XI_TOL) & (xi <= 1.0 + _XI_TOL)
+    # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
+    end = np.where((xi < 0.5)[:, None], p2, p3)
+    near_end = np.hypot(*(p1 - end).T) <= search_distance
+    ok = (on_edge | near_end) & (gap <= search_distance) & (gap >= -penetration_limit)
     # entrance test: both edges at the vertex leave towards the outside of the edge's line
     sin_tol = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
     for nb in (topo.prv[vertex], topo.nxt[vertex]):
@@ -203,20 +209,21 @@ def narrow_phase(
         arm_len = np.hypot(arm[:, 0], arm[:, 1])
         ok &= np.einsum("ij,ij->i", arm, normal) >= -sin_tol * arm_len
     vertex, edge, xi, normal, p1 = vertex[ok], edge[ok], xi[ok], normal[ok], p1[ok]
+    on_edge = on_edge[ok]
     if len(vertex) == 0:
         return empty
     kblock = topo.block[edge]
     score = -np.einsum("ij,ij->i", normal, bisector[vertex])
 
     # one edge per (vertex, block): the best opposed
-    order = np.lexsort((-score, kblock, vertex))
-    vertex, edge, xi, kblock, score, p1 = (
-        a[order] for a in (vertex, edge, xi, kblock, score, p1)
+    order = np.lexsort((-score, ~on_edge, kblock, vertex))
+    vertex, edge, xi, kblock, score, p1, on_edge = (
+        a[order] for a in (vertex, edge, xi, kblock, score, p1, on_edge)
     )
     first = np.ones(len(vertex), dtype=bool)
     first[1:] = (vertex[1:] != vertex[:-1]) | (kblock[1:] != kblock[:-1])
-    vertex, edge, xi, kblock, score, p1 = (
-        a[first] for a in (vertex, edge, xi, kblock, score, p1)
+    vertex, edge, xi, kblock, score, p1, on_edge = (
+        a[first] for a in (vertex, edge, xi, kblock, score, p1, on_edge)
     )
 
     # vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)
@@ -227,7 +234,7 @@ def narrow_phase(
         idx = np.flatnonzero(vv)
         a = np.minimum(vertex[idx], near_end[idx])
         b = np.maximum(vertex[idx], near_end[idx])
-        order = np.lexsort((vertex[idx], -score[idx], b, a))
+        order = np.lexsort((vertex[idx], -score[idx], ~on_edge[idx], b, a))
         a, b, idx = a[order], b[order], idx[order]
         dup = np.zeros(len(idx), dtype=bool)
         dup[1:] = (a[1:] == a[:-1]) & (b[1:] == b[:-1])

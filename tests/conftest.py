@@ -1,0 +1,38 @@
+"""Shared scene builders for the tests."""
+
+import numpy as np
+import pytest
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.materials import LinearElastic
+
+
+@pytest.fixture
+def rock():
+    return LinearElastic(young=14.9e9, poisson=0.2, density=2198.0)
+
+
+def box(x0, y0, w, h):
+    """Counter-clockwise rectangle with its lower-left corner at (x0, y0)."""
+    return [(x0, y0), (x0 + w, y0), (x0 + w, y0 + h), (x0, y0 + h)]
+
+
+def incline_scene(phi, slope_deg=30.0, penalty=1e9, gravity=9.81):
+    """A 0.5 m square block on a fixed wedge whose top face rises at slope_deg."""
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=gravity)
+    th = np.radians(slope_deg)
+    length = 4.0
+    scene.add_block(
+        [(0, 0), (length * np.cos(th), 0), (length * np.cos(th), length * np.sin(th))],
+        rock, fixed=True, name="base",
+    )
+    t = np.array([np.cos(th), np.sin(th)])
+    n = np.array([-np.sin(th), np.cos(th)])
+    p0 = 2.5 * t
+    a = 0.5
+    top = scene.add_block([p0, p0 + a * t, p0 + a * t + a * n, p0 + a * n], rock, name="top")
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
+                                  friction=CoulombSingle(phi=phi)))
+    return scene, top, t

@@ -1,0 +1,100 @@
+"""Broad and narrow phase: the right vertex-edge pairs, and nothing twice."""
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from dda.contact.detection import (
+    VertexTopology,
+    bounding_boxes,
+    broad_phase,
+    find_overlaps,
+    narrow_phase,
+)
+from tests.conftest import box
+
+
+def stack(*polys):
+    verts = np.concatenate([np.asarray(p, float) for p in polys])
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polys])])
+    return verts, offsets
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.tuples(st.floats(0, 10), st.floats(0, 10), st.floats(0.01, 2),
+                          st.floats(0.01, 2)), min_size=0, max_size=30),
+       st.floats(0, 0.5))
+def test_broad_phase_equals_brute_force(rects, margin):
+    boxes = np.array([[x, y, x + w, y + h] for x, y, w, h in rects]).reshape(-1, 4)
+    pairs = {tuple(p) for p in broad_phase(boxes, margin).tolist()}
+    brute = set()
+    for i in range(len(boxes)):
+        for j in range(i + 1, len(boxes)):
+            a, b = boxes[i], boxes[j]
+            if (a[0] - margin <= b[2] + margin and b[0] - margin <= a[2] + margin
+                    and a[1] - margin <= b[3] + margin and b[1] - margin <= a[3] + margin):
+                brute.add((i, j))
+    assert pairs == brute
+
+
+def contacts_of(*polys, d0=1e-3):
+    x, offsets = stack(*polys)
+    topo = VertexTopology.from_offsets(offsets)
+    c = narrow_phase(x, topo, d0, 2 * d0)
+    return x, c
+
+
+def test_narrow_block_on_wide_base_two_contacts():
+    x, c = contacts_of(box(0, 0, 1, 0.2), box(0.4, 0.2, 0.2, 0.2))
+    assert len(c) == 2
+    assert set(c.vertex.tolist()) == {4, 5}  # the top block's two lower corners
+    assert set(c.edge.tolist()) == {2}  # on the base's top edge (2 -> 3)
+
+
+def test_equal_width_stack_two_contacts_not_four():
+    x, c = contacts_of(box(0, 0, 1, 0.2), box(0, 0.2, 1, 0.2))
+    assert len(c) == 2
+    # one contact at each end of the interface, whichever block owns the vertex
+    pts = np.sort(x[c.vertex][:, 0])
+    np.testing.assert_allclose(pts, [0.0, 1.0])
+
+
+def test_side_by_side_blocks_touch_along_vertical_edge():
+    x, c = contacts_of(box(0, 0, 1, 1), box(1, 0, 1, 1))
+    assert len(c) == 2
+    np.testing.assert_allclose(np.sort(x[c.vertex][:, 1]), [0.0, 1.0])
+
+
+def test_far_blocks_have_no_contact():
+    x, c = contacts_of(box(0, 0, 1, 1), box(0, 1.01, 1, 1), d0=1e-3)
+    assert len(c) == 0
+
+
+def test_corner_onto_face_picks_the_face():
+    # a square rotated 45 degrees with its lowest corner just above a flat base
+    s = np.sqrt(0.5) * 0.2
+    diamond = [(0.5, 0.2005), (0.5 + s, 0.2005 + s), (0.5, 0.2005 + 2 * s), (0.5 - s, 0.2005 + s)]
+    x, c = contacts_of(box(0, 0, 1, 0.2), diamond)
+    assert len(c) == 1
+    assert c.vertex[0] == 4 and c.edge[0] == 2
+
+
+def test_vertex_to_vertex_keeps_one_pair():
+    # two diamonds corner to corner, one above the other
+    s = 0.1
+    low = [(0.0, -2 * s), (s, -s), (0.0, 0.0), (-s, -s)]
+    high = [(0.0, 0.0005), (s, s + 0.0005), (0.0, 2 * s + 0.0005), (-s, s + 0.0005)]
+    x, c = contacts_of(low, high)
+    assert len(c) == 1
+
+
+def test_find_overlaps():
+    x, off = stack(box(0, 0, 1, 1), box(1, 0, 1, 1), box(0.5, 0.5, 1, 1))
+    assert find_overlaps(x, off) == [(0, 2), (1, 2)]
+    x, off = stack(box(0, 0, 1, 1), box(1, 0, 1, 1))
+    assert find_overlaps(x, off) == []
+
+
+def test_bounding_boxes():
+    x, off = stack(box(0, 0, 1, 2), box(3, 1, 1, 1))
+    np.testing.assert_allclose(bounding_boxes(x, off), [[0, 0, 1, 2], [3, 1, 4, 2]])

@@ -1,0 +1,84 @@
+"""VTU/PVD output read back with meshio and pyvista equals the Result."""
+
+import xml.etree.ElementTree as ET
+
+import meshio
+import numpy as np
+import pytest
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from tests.conftest import box
+
+
+@pytest.fixture
+def run_with_output(tmp_path, rock):
+    scene = dda.Scene(gravity=9.81)
+    base = scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True, name="base")
+    top = scene.add_block(box(0.4, 0.2, 0.2, 0.2), rock, name="top")
+    tri = scene.add_block([(0.1, 0.2), (0.3, 0.2), (0.2, 0.35)], rock, name="tri")
+    scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
+                                  friction=CoulombSingle(phi=30)))
+    scene.shake(base, acceleration=lambda t: (3.0 * np.sin(2 * np.pi * 5 * t), 0.0))
+    writer = dda.io.VTUWriter(tmp_path / "out" / "case")
+    result = dda.Simulation(scene, dt=1e-3, record_every=20).run(duration=0.2, output=writer)
+    return result, writer, (base, top, tri)
+
+
+def test_pvd_lists_every_file(run_with_output):
+    result, writer, _ = run_with_output
+    root = ET.parse(writer.pvd_path).getroot()
+    entries = root.findall("./Collection/DataSet")
+    assert len(entries) == len(result.time) == len(writer.files) == 11
+    np.testing.assert_allclose([float(e.get("timestep")) for e in entries], result.time)
+    for e, f in zip(entries, writer.files, strict=True):
+        assert f.exists() and f.name == e.get("file")
+
+
+def _block_rows(mesh, name):
+    ids = np.concatenate(mesh.cell_data["block_id"])
+    vals = np.concatenate(mesh.cell_data[name])
+    keep = ids >= 0
+    return ids[keep].astype(int), vals[keep]
+
+
+def test_meshio_fields_equal_the_result(run_with_output):
+    result, writer, blocks = run_with_output
+    for i, path in enumerate(writer.files):
+        mesh = meshio.read(path)
+        for field, getter, ncomp in (("displacement", result.displacement, 2),
+                                     ("stress", result.stress, 3)):
+            ids, vals = _block_rows(mesh, field)
+            for b in blocks:
+                row = vals[ids == b.index][0][:ncomp]
+                np.testing.assert_allclose(row, getter(b)[i], rtol=1e-12, atol=1e-15)
+        ids, vel = _block_rows(mesh, "velocity")
+        for b in blocks:
+            np.testing.assert_allclose(vel[ids == b.index][0][:2], result.velocity(b)[i, :2],
+                                       rtol=1e-12, atol=1e-15)
+        # contacts: the normal forces on the top block add up to the joint force
+        kind = np.concatenate(mesh.cell_data["kind"])
+        fn = np.concatenate(mesh.cell_data["normal_force"])[kind == 1]
+        assert np.all(fn >= 0)
+
+
+def test_pyvista_reads_the_series(run_with_output):
+    pv = pytest.importorskip("pyvista")
+    result, writer, (base, top, tri) = run_with_output
+    reader = pv.get_reader(str(writer.pvd_path))
+    assert len(reader.time_values) == len(result.time)
+    reader.set_active_time_point(len(result.time) - 1)
+    grid = reader.read()[0]
+    ids = grid.cell_data["block_id"]
+    row = np.flatnonzero(ids == top.index)[0]
+    np.testing.assert_allclose(grid.cell_data["displacement"][row][:2],
+                               result.displacement(top)[-1], rtol=1e-12)
+    # vertex displacements: the point data of the top block's corners
+    first = 4 * top.index
+    moved = grid.points[first:first + 4, :2] - np.array(box(0.4, 0.2, 0.2, 0.2))
+    np.testing.assert_allclose(grid.point_data["displacement"][first:first + 4, :2], moved,
+                               atol=1e-12)
+    contact_cells = np.flatnonzero(grid.cell_data["kind"] == 1)
+    total = grid.cell_data["normal_force"][contact_cells].sum()
+    joint = sum(result.joint_force(a, b)[-1, 0] for a, b in ((base, top), (base, tri)))
+    assert total == pytest.approx(joint, rel=1e-3)

@@ -1,0 +1,142 @@
+"""Bad input gets an error that names the block, joint or argument and says what is wrong."""
+
+import numpy as np
+import pytest
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.materials import LinearElastic
+from tests.conftest import box
+
+ROCK = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
+JOINT = JointMaterial(normal_penalty=1e9, shear_penalty=1e9, friction=CoulombSingle(phi=30))
+
+
+def test_clockwise_polygon_named():
+    scene = dda.Scene()
+    with pytest.raises(ValueError, match=r"block 'cw'.*clockwise"):
+        scene.add_block(box(0, 0, 1, 1)[::-1], ROCK, name="cw")
+
+
+def test_self_intersecting_polygon_named():
+    scene = dda.Scene()
+    with pytest.raises(ValueError, match=r"block 'bow'.*self-intersecting"):
+        scene.add_block([(0, 0), (1, 1), (1, 0), (0, 1)], ROCK, name="bow")
+
+
+@pytest.mark.parametrize("verts, what", [
+    ([(0, 0), (1, 0)], "n >= 3"),
+    ([(0, 0), (1, 0), (np.nan, 1)], "NaN"),
+    ([(0, 0), (1, 0), (2, 0)], "zero area"),
+    ([(0, 0), (0, 0), (1, 1)], "coincide"),
+])
+def test_degenerate_polygons(verts, what):
+    with pytest.raises(ValueError, match=what):
+        dda.Scene().add_block(verts, ROCK, name="b")
+
+
+def test_overlapping_blocks_named():
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(0, 0, 1, 1), ROCK, name="a")
+    scene.add_block(box(0.5, 0.5, 1, 1), ROCK, name="b")
+    scene.set_joint(JOINT)
+    with pytest.raises(ValueError, match=r"'a' and .*'b' overlap"):
+        dda.Simulation(scene, dt=1e-3)
+
+
+def test_crossing_without_vertex_inside_is_overlap():
+    scene = dda.Scene()
+    scene.add_block(box(0, 0.4, 3, 0.2), ROCK, name="bar")
+    scene.add_block(box(1.4, 0, 0.2, 1), ROCK, name="post")
+    scene.set_joint(JOINT)
+    with pytest.raises(ValueError, match="overlap"):
+        dda.Simulation(scene, dt=1e-3)
+
+
+def test_touching_blocks_are_fine():
+    scene = dda.Scene()
+    scene.add_block(box(0, 0, 1, 1), ROCK, name="a")
+    scene.add_block(box(1, 0, 1, 1), ROCK, name="b")  # shares an edge
+    scene.add_block(box(2, 1, 1, 1), ROCK, name="c")  # shares a corner with b
+    scene.set_joint(JOINT)
+    dda.Simulation(scene, dt=1e-3)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(young=-1.0, poisson=0.2, density=1.0), "young"),
+    (dict(young=np.nan, poisson=0.2, density=1.0), "young"),
+    (dict(young=1.0, poisson=0.5, density=1.0), "poisson"),
+    (dict(young=1.0, poisson=0.2, density=0.0), "density"),
+])
+def test_bad_material(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        LinearElastic(**kwargs)
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    (dict(normal_penalty=-1.0, shear_penalty=1.0), "normal_penalty"),
+    (dict(normal_penalty=1.0, shear_penalty=float("nan")), "shear_penalty"),
+])
+def test_bad_joint(kwargs, name):
+    with pytest.raises(ValueError, match=name):
+        JointMaterial(friction=CoulombSingle(phi=30), **kwargs)
+
+
+@pytest.mark.parametrize("phi", [-1.0, 90.0, float("nan")])
+def test_bad_friction_angle(phi):
+    with pytest.raises(ValueError, match="phi"):
+        CoulombSingle(phi=phi)
+
+
+def test_joint_needs_a_law():
+    with pytest.raises(TypeError, match="friction"):
+        JointMaterial(normal_penalty=1.0, shear_penalty=1.0, friction=0.6)
+
+
+def test_bad_simulation_arguments():
+    scene = dda.Scene()
+    scene.add_block(box(0, 0, 1, 1), ROCK)
+    for kwargs, name in [(dict(dt=0.0), "dt"), (dict(dt=-1e-3), "dt"),
+                         (dict(dt=1e-3, analysis="quasi"), "analysis"),
+                         (dict(dt=1e-3, velocity_carry=1.5), "velocity_carry")]:
+        with pytest.raises(ValueError, match=name):
+            dda.Simulation(scene, **kwargs)
+    with pytest.raises(ValueError, match="duration"):
+        dda.Simulation(scene, dt=1e-3).run(duration=np.nan)
+
+
+def test_record_that_does_not_cover_the_run():
+    scene = dda.Scene(gravity=9.81)
+    base = scene.add_block(box(0, 0, 1, 0.2), ROCK, name="table")
+    scene.add_block(box(0.4, 0.2, 0.2, 0.2), ROCK)
+    scene.set_joint(JOINT)
+    t = np.linspace(0, 0.5, 51)
+    scene.shake(base, acceleration=np.sin(t), times=t)
+    sim = dda.Simulation(scene, dt=1e-2)
+    with pytest.raises(ValueError, match=r"table.*ends at t = 0.5"):
+        sim.run(duration=1.0)
+
+
+def test_missing_default_joint():
+    scene = dda.Scene()
+    scene.add_block(box(0, 0, 1, 1), ROCK)
+    scene.add_block(box(0, 1, 1, 1), ROCK)
+    with pytest.raises(ValueError, match="default joint"):
+        dda.Simulation(scene, dt=1e-3)
+
+
+def test_effect_conflicts_and_unknown_blocks():
+    scene = dda.Scene()
+    fixed = scene.add_block(box(0, 0, 1, 1), ROCK, fixed=True, name="f")
+    with pytest.raises(ValueError, match="'f' is fixed"):
+        scene.prescribe_motion(fixed, displacement=lambda t: (t, None))
+    scene.shake(fixed, acceleration=lambda t: (1.0, 0.0))  # a fixed block may be a table
+    with pytest.raises(ValueError, match="'f' has a prescribed motion"):
+        scene.shake(fixed, acceleration=lambda t: (1.0, 0.0))
+    with pytest.raises(ValueError, match="no block named"):
+        scene.add_point_load("nope", point=(0, 0), force=(1, 0))
+    with pytest.raises(ValueError, match="unique"):
+        scene.add_block(box(2, 0, 1, 1), ROCK, name="f")
+    with pytest.raises(ValueError, match="displacement"):
+        scene.prescribe_motion(scene.add_block(box(4, 0, 1, 1), ROCK),
+                               displacement=lambda t: (1.0 + t, None))
