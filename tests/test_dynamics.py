@@ -108,3 +108,42 @@ def test_column_of_ten_blocks_stands(rock):
         assert np.abs(d[:, 1]).max() < 2.0 * static  # at most the dynamic overshoot of a step load
         assert np.abs(result.velocity(b)[-1, :3]).max() < 1e-6
     assert result.joint_force(base, blocks[0])[-1, 0] == pytest.approx(weight, rel=1e-3)
+
+
+def _kinetic_energy(result, block, mass, inertia):
+    v = result.velocity(block)
+    return 0.5 * mass * (v[:, 0] ** 2 + v[:, 1] ** 2) + 0.5 * inertia * v[:, 2] ** 2
+
+
+def test_sliding_block_stops_at_coulomb_distance_and_stays(rock):
+    """v0^2 / (2 mu g): the slip must turn to stick when it would reverse."""
+    scene = dda.Scene(gravity=G)
+    base = scene.add_block(box(0, 0, 3, 0.2), rock, fixed=True, name="base")
+    top = scene.add_block(box(0.2, 0.2, 0.2, 0.1), rock, velocity=(1.0, 0.0), name="top")
+    scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
+                                  friction=CoulombSingle(phi=30)))
+    result = dda.Simulation(scene, dt=1e-3).run(duration=0.6)
+    mu = np.tan(np.radians(30))
+    stop = 1.0**2 / (2 * mu * G)
+    x = result.displacement(top)[:, 0]
+    assert x[-1] == pytest.approx(stop, rel=0.01)
+    after = result.time > 1.0 / (mu * G) + 0.02
+    assert np.ptp(x[after]) < 1e-6  # stays stopped: no creep, no reversal
+    assert result.joint_force(base, top)[-1, 1] == pytest.approx(0.0, abs=1.0)
+
+
+def test_block_sliding_into_a_wall_gains_no_energy(rock):
+    scene = dda.Scene(gravity=G)
+    scene.add_block(box(0, 0, 2, 0.2), rock, fixed=True, name="floor")
+    scene.add_block(box(0.75, 0.2, 0.1, 0.3), rock, fixed=True, name="wall")
+    top = scene.add_block(box(0.5, 0.2, 0.24, 0.13), rock, velocity=(0.5, 0.0), name="top")
+    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                                  friction=CoulombSingle(phi=31.6)))
+    result = dda.Simulation(scene, dt=1e-3).run(duration=0.5)
+    mass = rock.density * 0.24 * 0.13
+    inertia = mass * (0.24**2 + 0.13**2) / 12
+    energy = _kinetic_energy(result, top, mass, inertia)
+    energy += mass * G * result.displacement(top)[:, 1]
+    assert result.displacement(top)[:, 0].max() > 0.0099  # it reached the wall at x = 0.75
+    assert energy.max() <= energy[0] * 1.01
+    assert np.all(np.isfinite(energy))
