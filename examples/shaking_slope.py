@@ -34,18 +34,25 @@ DIP = np.radians(15.0)
 STOP = 0.105  # slide down the joint at which the stopper holds the upper block (m)
 
 
-def table_acceleration(duration: float, peak_gal: float = 670.0, freq: float = 2.0):
-    """2 Hz sine whose amplitude rises in equal steps (one step per second) to ``peak_gal``."""
-    steps = max(int(np.ceil(duration)), 1)
+def table_acceleration(peak_gal: float = 670.0, freq: float = 2.0, levels: int = 6,
+                       hold: float = 1.0):
+    """A 2 Hz sine whose amplitude rises in ``levels`` equal steps, one every ``hold`` seconds,
+    to ``peak_gal`` and then stays there."""
 
     def accel(t):
-        level = min(int(t) + 1, steps) / steps
+        level = min(int(t / hold) + 1, levels) / levels
         return (0.01 * peak_gal * level * np.sin(2 * np.pi * freq * t), 0.0)
 
     return accel
 
 
-def build_scene(phi: float = 31.6, duration: float = 6.0, peak_gal: float = 670.0):
+def slide_threshold(phi: float) -> float:
+    """Table acceleration (m/s^2, towards the slope's back) at which the upper block slips:
+    g tan(phi - 15 deg), from the block's balance in the table's frame."""
+    return G * np.tan(np.radians(phi) - DIP)
+
+
+def build_scene(phi: float = 31.6, peak_gal: float = 670.0):
     """The scene: a lower block with a 15 degree face (on the table) and an upper block on it."""
     rock = LinearElastic(young=7.0e9, poisson=0.33, density=22.0e3 / G)
     scene = dda.Scene(gravity=G)
@@ -68,7 +75,7 @@ def build_scene(phi: float = 31.6, duration: float = 6.0, peak_gal: float = 670.
                              (x1, face(x1) + height)], rock, name="upper")
     scene.set_joint(JointMaterial(normal_penalty=10e9, shear_penalty=10e9,
                                   friction=CoulombSingle(phi=phi)))
-    scene.shake(lower, acceleration=table_acceleration(duration, peak_gal))
+    scene.shake(lower, acceleration=table_acceleration(peak_gal))
     return scene, lower, upper
 
 
@@ -77,6 +84,22 @@ def slide_along_joint(result, lower, upper) -> np.ndarray:
     rel = result.displacement(upper) - result.displacement(lower)
     down_dip = np.array([np.cos(DIP), -np.sin(DIP)])
     return rel @ down_dip
+
+
+def slide_start(result, slide, creep: float = 1e-5) -> float:
+    """First time the slide exceeds ``creep`` metres beyond its elastic settling."""
+    settled = slide[np.searchsorted(result.time, 0.5)]
+    moving = np.flatnonzero(slide - settled > creep)
+    return float(result.time[moving[0]]) if len(moving) else float("nan")
+
+
+def threshold_time(args) -> float:
+    """First time the table acceleration exceeds the slip threshold (towards -x)."""
+    accel = table_acceleration(args.peak)
+    t = np.arange(0.0, args.duration, 1e-4)
+    ax = np.array([accel(ti)[0] for ti in t])
+    beyond = np.flatnonzero(-ax > slide_threshold(args.phi))
+    return float(t[beyond[0]]) if len(beyond) else float("nan")
 
 
 def plot(result, lower, upper, accel, path: Path):
@@ -107,17 +130,17 @@ def main(argv=None):
     ap.add_argument("--peak", type=float, default=670.0, help="last amplitude step, gal")
     args = ap.parse_args(argv)
     out = Path(args.out)
-    scene, lower, upper = build_scene(args.phi, args.duration, args.peak)
+    scene, lower, upper = build_scene(args.phi, args.peak)
     writer = dda.io.VTUWriter(out / "slope", every=max(1, int(round(0.02 / args.dt))))
     sim = dda.Simulation(scene, dt=args.dt)
     result = sim.run(args.duration, output=writer, progress=sys.stderr.isatty())
-    accel = table_acceleration(args.duration, args.peak)
+    accel = table_acceleration(args.peak)
     plot(result, lower, upper, accel, out / "slide.png")
     slide = slide_along_joint(result, lower, upper)
-    moving = np.flatnonzero(np.abs(slide) > 1e-4)
-    start = result.time[moving[0]] if len(moving) else float("nan")
-    print(f"slide down the joint after {args.duration:g} s: {1e3 * slide[-1]:.2f} mm "
-          f"(starts at t = {start:.3f} s)")
+    start = slide_start(result, slide)
+    print(f"slide down the joint after {args.duration:g} s: {1e3 * slide[-1]:.2f} mm; it starts "
+          f"at t = {start:.3f} s (table beyond g tan(phi - 15) = "
+          f"{100 * slide_threshold(args.phi):.0f} gal at t = {threshold_time(args):.3f} s)")
     print(f"wrote {len(writer.files)} VTU files, {writer.pvd_path} and {out / 'slide.png'}")
     print(result.profile())
     return result, slide
