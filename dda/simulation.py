@@ -187,6 +187,22 @@ class Simulation:
         vel[~self.free] = 0.0
         loads = np.array([ld.point for ld in sc._loads]).reshape(-1, 2)
         self.load_block = np.array([ld.block for ld in sc._loads], dtype=np.int64)
+        self.load_constant = np.array([ld.force(0.0) if ld.force.constant else (0.0, 0.0)
+                                       for ld in sc._loads]).reshape(-1, 2)
+        self.load_varying = [(i, ld.force) for i, ld in enumerate(sc._loads)
+                             if not ld.force.constant]
+        # partial constraints: one penalty spring per vertex of each such block, as arrays
+        blocks_p = [m.block for m in self.partial]
+        counts = np.array([offsets[b + 1] - offsets[b] for b in blocks_p], dtype=np.int64)
+        self.pc_vertex = np.concatenate(
+            [np.arange(offsets[b], offsets[b + 1]) for b in blocks_p]).astype(np.int64) \
+            if blocks_p else np.zeros(0, dtype=np.int64)
+        self.pc_block = self.topo.block[self.pc_vertex]
+        self.pc_motion = np.repeat(np.arange(len(blocks_p)), counts)
+        self.pc_mask = np.array([m.displacement.mask for m in self.partial],
+                                dtype=float).reshape(-1, 2)[self.pc_motion]
+        self.pc_penalty = np.array([m.penalty or self.constraint_penalty
+                                    for m in self.partial]).reshape(-1)[self.pc_motion]
         self.state = _Committed(
             time=0.0, x=x0.copy(), velocity=vel, stress=np.zeros((nb, 3)),
             rotation=np.zeros(nb), contacts=ContactSet.empty(fields), load_points=loads,
@@ -227,20 +243,20 @@ class Simulation:
             f[:, 1] -= self.scene.gravity * self.density * ints.area
         f[:, 3:] -= ints.area[:, None] * st.stress
         if len(self.load_block):
-            forces = np.array([ld.force(t1) for ld in self.scene._loads])
+            forces = self.load_constant.copy()
+            for i, history in self.load_varying:  # one user callable per time-varying load
+                forces[i] = history(t1)
             t = geometry.t_matrix(st.load_points, centroid[self.load_block])
             np.add.at(f, self.load_block, np.einsum("lij,li->lj", t, forces))
-        for mo in self.partial:
-            # penalty springs on every vertex of the block in the constrained direction(s)
-            sl = slice(self.offsets[mo.block], self.offsets[mo.block + 1])
-            xv = st.x[sl]
-            t = geometry.t_matrix(xv, np.repeat(centroid[mo.block][None], len(xv), axis=0))
-            mask = mo.displacement.mask.astype(float)
-            p = mo.penalty or self.constraint_penalty
-            target = self.x_initial[sl] + mo.displacement(t1) - xv
-            tm = t * mask[None, :, None]
-            k[mo.block] += p * np.einsum("vij,vik->jk", tm, tm)
-            f[mo.block] += p * np.einsum("vij,vi->j", tm, target * mask)
+        if len(self.pc_vertex):
+            # penalty springs p T^T T on the constrained directions of every vertex (METHOD s. 1)
+            u = np.array([mo.displacement(t1) for mo in self.partial])[self.pc_motion]
+            xv = st.x[self.pc_vertex]
+            t = geometry.t_matrix(xv, centroid[self.pc_block]) * self.pc_mask[:, :, None]
+            target = (self.x_initial[self.pc_vertex] + u - xv) * self.pc_mask
+            p = self.pc_penalty
+            np.add.at(k, self.pc_block, p[:, None, None] * np.einsum("vij,vik->vjk", t, t))
+            np.add.at(f, self.pc_block, p[:, None] * np.einsum("vij,vi->vj", t, target))
         return k, m, f
 
     def _search_distance(self, dt, centroid, known_du):

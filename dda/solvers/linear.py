@@ -14,7 +14,7 @@ import scipy.sparse.linalg as spla
 
 __all__ = ["assemble_and_solve", "DENSE_LIMIT"]
 
-DENSE_LIMIT = 240
+DENSE_LIMIT = 300
 
 _I6, _J6 = np.meshgrid(np.arange(6), np.arange(6), indexing="ij")
 
