@@ -33,9 +33,10 @@ class Frame:
 class StepStats:
     """Per-step statistics as arrays: ``stats.wall_time``, ``stats["open_close_passes"]`` ...
 
-    Fields: time, dt, iterations (linear solves or Newton iterations), open_close_passes,
-    contacts (number of contact pairs tracked), closed (closed contacts), retries (failed tries
-    before the step went through), wall_time (s).
+    Fields: time, dt, iterations (legacy: linear solves; Newton: iterations after OPEN-CLOSE),
+    open_close_passes, contacts (vertex-edge pairs tracked), closed (closed contacts), retries
+    (failed tries before the step went through), wall_time (s). ``residual_norms`` holds the
+    Newton out-of-balance norms of every step and ``cuts`` every dt cut as (time, dt, reason).
     """
 
     FIELDS = ("time", "dt", "iterations", "open_close_passes", "contacts", "closed", "retries",
@@ -44,10 +45,13 @@ class StepStats:
     def __init__(self):
         self._rows = {k: [] for k in self.FIELDS}
         self.cuts: list[tuple[float, float, str]] = []
+        #: per step, the out-of-balance norms of the Newton iterations (empty for legacy)
+        self.residual_norms: list[np.ndarray] = []
 
-    def append(self, **row):
+    def append(self, residual_norms=(), **row):
         for k in self.FIELDS:
             self._rows[k].append(row[k])
+        self.residual_norms.append(np.asarray(residual_norms, dtype=float))
 
     def __getitem__(self, key) -> np.ndarray:
         if key not in self._rows:
@@ -71,7 +75,7 @@ class StepStats:
         wall = self["wall_time"]
         return (
             f"{len(self)} steps, {wall.sum():.3g} s wall ({1e3 * wall.mean():.3g} ms/step), "
-            f"{self['iterations'].sum()} solves, max {self['open_close_passes'].max()} "
+            f"{self['iterations'].sum()} iterations, max {self['open_close_passes'].max()} "
             f"OPEN-CLOSE passes, {len(self.cuts)} dt cuts"
         )
 

@@ -47,6 +47,12 @@ class _Motion:
     block: int
     displacement: DisplacementHistory
     penalty: float | None
+    points: np.ndarray | None = None
+
+    @property
+    def springs(self) -> bool:
+        """Held by penalty springs (some points or one direction) rather than moved exactly."""
+        return self.points is not None or not self.displacement.mask.all()
 
 
 @dataclass
@@ -238,8 +244,9 @@ class Scene:
         hist = AccelerationHistory(acceleration, times, name=f"shake of {h}")
         self._shakes.append(_Shake(h.index, hist))
 
-    def prescribe_motion(self, block, displacement, penalty: float | None = None) -> None:
-        """Prescribe the displacement of every vertex of a block.
+    def prescribe_motion(self, block, displacement, penalty: float | None = None,
+                         points=None) -> None:
+        """Prescribe the displacement of every vertex of a block (or of some of its points).
 
         Parameters
         ----------
@@ -249,15 +256,30 @@ class Scene:
             leaves that direction free. With both given the block translates as prescribed and
             carries no unknowns; with one None, penalty springs hold the other direction.
         penalty : float, optional
-            Spring stiffness (N/m) of a partial constraint; default 100 x the largest Young's
+            Spring stiffness (N/m) of a spring constraint; default 100 x the largest Young's
             modulus x 1 m.
+        points : (n, 2) array-like, optional
+            Material points of the block that follow the displacement (a loading platen on
+            one face, say), each through a penalty spring; the block keeps its unknowns and
+            deforms. Default: every vertex.
         """
         h = self.block(block)
         hist = DisplacementHistory(displacement, name=f"prescribe_motion of {h}")
-        self._movable(h, "prescribe_motion", partial=not hist.mask.all())
+        pts = None
+        if points is not None:
+            try:
+                pts = np.array(points, dtype=float).reshape(-1, 2)
+            except (TypeError, ValueError):
+                raise ValueError(
+                    f"prescribe_motion of {h}: points must be an (n, 2) array of numbers"
+                ) from None
+            if len(pts) == 0 or not np.all(np.isfinite(pts)):
+                raise ValueError(
+                    f"prescribe_motion of {h}: points must be finite and at least one")
+        self._movable(h, "prescribe_motion", partial=pts is not None or not hist.mask.all())
         if penalty is not None:
             penalty = finite_number("penalty", penalty, positive=True, where="prescribe_motion")
-        self._motions.append(_Motion(h.index, hist, penalty))
+        self._motions.append(_Motion(h.index, hist, penalty, pts))
 
     def add_point_load(self, block, point, force) -> None:
         """Apply a point force (N per m of thickness) at a material point of a block.

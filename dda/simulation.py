@@ -32,6 +32,8 @@ MAX_CUTS = 12
 GROW_AFTER = 8
 # the search distance is this multiple of the step's predicted largest vertex displacement
 SEARCH_FACTOR = 2.5
+# times a step is tried again with a wider search before its dt is cut instead
+MAX_WIDENINGS = 2
 
 
 class SimulationError(RuntimeError):
@@ -53,6 +55,7 @@ class _Committed:
     rotation: np.ndarray
     contacts: ContactSet
     load_points: np.ndarray
+    spring_points: np.ndarray
     known_u: np.ndarray
     last_move: float
 
@@ -141,8 +144,8 @@ class Simulation:
         # blocks whose motion is known carry no unknowns
         self.free = np.array([not b.fixed for b in blocks])
         self.shakes = list(sc._shakes)
-        full = [m for m in sc._motions if m.displacement.mask.all()]
-        self.partial = [m for m in sc._motions if not m.displacement.mask.all()]
+        full = [m for m in sc._motions if not m.springs]
+        self.partial = [m for m in sc._motions if m.springs]
         self.full_motions = full
         for s in self.shakes:
             self.free[s.block] = False
@@ -191,14 +194,16 @@ class Simulation:
                                        for ld in sc._loads]).reshape(-1, 2)
         self.load_varying = [(i, ld.force) for i, ld in enumerate(sc._loads)
                              if not ld.force.constant]
-        # partial constraints: one penalty spring per vertex of each such block, as arrays
-        blocks_p = [m.block for m in self.partial]
-        counts = np.array([offsets[b + 1] - offsets[b] for b in blocks_p], dtype=np.int64)
-        self.pc_vertex = np.concatenate(
-            [np.arange(offsets[b], offsets[b + 1]) for b in blocks_p]).astype(np.int64) \
-            if blocks_p else np.zeros(0, dtype=np.int64)
-        self.pc_block = self.topo.block[self.pc_vertex]
-        self.pc_motion = np.repeat(np.arange(len(blocks_p)), counts)
+        # spring constraints: one penalty spring per point (default: every vertex) of each
+        # such block, as arrays; the points are material points that move with the block
+        spring_points = [m.points if m.points is not None
+                         else x0[offsets[m.block]:offsets[m.block + 1]] for m in self.partial]
+        counts = np.array([len(p) for p in spring_points], dtype=np.int64)
+        self.pc_initial = (np.concatenate(spring_points) if spring_points
+                           else np.zeros((0, 2)))
+        self.pc_block = np.repeat(np.array([m.block for m in self.partial], dtype=np.int64),
+                                  counts)
+        self.pc_motion = np.repeat(np.arange(len(self.partial)), counts)
         self.pc_mask = np.array([m.displacement.mask for m in self.partial],
                                 dtype=float).reshape(-1, 2)[self.pc_motion]
         self.pc_penalty = np.array([m.penalty or self.constraint_penalty
@@ -206,9 +211,11 @@ class Simulation:
         self.state = _Committed(
             time=0.0, x=x0.copy(), velocity=vel, stress=np.zeros((nb, 3)),
             rotation=np.zeros(nb), contacts=ContactSet.empty(fields), load_points=loads,
+            spring_points=self.pc_initial.copy(),
             known_u=np.zeros((nb, 2)), last_move=0.0,
         )
         self._steps_done = 0
+        self._search_hint = 0.0
         self._dt_now = self.dt
         self._good_steps = 0
 
@@ -221,6 +228,16 @@ class Simulation:
             hit = self.pair_keys[pos] == key
             out[hit] = self.pair_joint[pos[hit]]
         return out
+
+    def _deepest_penetration(self) -> float:
+        """Deepest penetration of the committed closed contacts (m): soft penalties let
+        contacts sink further than a fixed limit, and a closed contact must never be lost."""
+        c = self.state.contacts
+        closed = c.state != OPEN
+        if not closed.any():
+            return 0.0
+        pn = self.joint_pn[self._joint_index(c.bj[closed], c.bk[closed])]
+        return float(np.max(-c.t_n[closed] / pn))
 
     def _known_motion(self, t1):
         """Known translation at t1 and velocity of every block whose motion is prescribed."""
@@ -248,12 +265,12 @@ class Simulation:
                 forces[i] = history(t1)
             t = geometry.t_matrix(st.load_points, centroid[self.load_block])
             np.add.at(f, self.load_block, np.einsum("lij,li->lj", t, forces))
-        if len(self.pc_vertex):
-            # penalty springs p T^T T on the constrained directions of every vertex (METHOD s. 1)
+        if len(self.pc_block):
+            # penalty springs p T^T T on the constrained directions of each point (METHOD s. 1)
             u = np.array([mo.displacement(t1) for mo in self.partial])[self.pc_motion]
-            xv = st.x[self.pc_vertex]
+            xv = st.spring_points
             t = geometry.t_matrix(xv, centroid[self.pc_block]) * self.pc_mask[:, :, None]
-            target = (self.x_initial[self.pc_vertex] + u - xv) * self.pc_mask
+            target = (self.pc_initial + u - xv) * self.pc_mask
             p = self.pc_penalty
             np.add.at(k, self.pc_block, p[:, None, None] * np.einsum("vij,vik->vjk", t, t))
             np.add.at(f, self.pc_block, p[:, None] * np.einsum("vij,vi->vj", t, target))
@@ -268,7 +285,7 @@ class Simulation:
         if len(known_du):
             predicted = max(predicted, float(np.max(np.hypot(known_du[:, 0], known_du[:, 1]))))
         floor = 1e-6 * float(np.min(self.size))
-        return SEARCH_FACTOR * max(predicted, st.last_move) + floor
+        return SEARCH_FACTOR * max(predicted, st.last_move, self._search_hint) + floor
 
     # ------------------------------------------------------------------ one step
     def _try_step(self, dt):
@@ -287,7 +304,8 @@ class Simulation:
         d_known[self.free] = 0.0
 
         d0 = self._search_distance(dt, centroid, d_known[~self.free, :2])
-        pen_limit = max(2.0 * d0, 1e-3 * float(np.min(self.size)))
+        pen_limit = max(2.0 * d0, 1e-3 * float(np.min(self.size)),
+                        2.0 * self._deepest_penetration() + d0)
         cand = narrow_phase(st.x, self.topo, d0, pen_limit)
         contacts, fresh = carry_over(st.contacts, cand, st.x, self.topo.nxt, self.topo.prv,
                                      self.n_blocks)
@@ -315,6 +333,7 @@ class Simulation:
             sol.converged = False
             sol.reason = (f"a vertex moved {largest:.3g} m, beyond the contact search distance "
                           f"{d0:.3g} m")
+            sol.search_hint = largest
             return None, sol
         vel = np.where(self.free[:, None], updated_velocity(d, v_eff, dt), 0.0)
         vel[~self.free, :2] = known_v[~self.free]
@@ -327,9 +346,14 @@ class Simulation:
         if len(self.load_block):
             load_points = load_points + geometry.vertex_displacements(
                 load_points, centroid[self.load_block], d[self.load_block])
+        spring_points = st.spring_points
+        if len(self.pc_block):
+            spring_points = spring_points + geometry.vertex_displacements(
+                spring_points, centroid[self.pc_block], d[self.pc_block])
         new = _Committed(
             time=t1, x=st.x + move, velocity=vel, stress=stress,
             rotation=st.rotation + d[:, 2], contacts=sol.contacts, load_points=load_points,
+            spring_points=spring_points,
             known_u=known_u, last_move=largest,
         )
         return new, sol
@@ -401,6 +425,7 @@ class Simulation:
     def _advance(self, result, t_end):
         """Take one step, cutting dt as often as needed; commit it and log its stats."""
         tries = 0
+        widened = 0
         start = _time.perf_counter()
         while True:
             dt = min(self._dt_now, t_end - self.state.time)
@@ -410,6 +435,12 @@ class Simulation:
                 break
             self._restore(snaps)
             tries += 1
+            hint = sol.search_hint
+            if hint > self._search_hint and widened < MAX_WIDENINGS:
+                # the step moved farther than predicted: search wider and try it again
+                self._search_hint = hint
+                widened += 1
+                continue
             result.stats.cuts.append((self.state.time, dt, sol.reason))
             self._dt_now = dt / 2.0
             self._good_steps = 0
@@ -419,6 +450,7 @@ class Simulation:
                     f"(step cut {tries} times down to dt = {dt:.3g} s)"
                 )
         self.state = new
+        self._search_hint = 0.0
         self._steps_done += 1
         self._good_steps += 1
         if self._dt_now < self.dt and self._good_steps >= GROW_AFTER:
@@ -429,7 +461,7 @@ class Simulation:
             time=new.time, dt=dt, iterations=sol.iterations,
             open_close_passes=sol.open_close_passes, contacts=len(c),
             closed=int(np.count_nonzero(c.state != OPEN)), retries=tries,
-            wall_time=_time.perf_counter() - start,
+            wall_time=_time.perf_counter() - start, residual_norms=sol.residual_norms,
         )
 
     # ------------------------------------------------------------------ recording

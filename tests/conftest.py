@@ -36,3 +36,28 @@ def incline_scene(phi, slope_deg=30.0, penalty=1e9, gravity=9.81):
     scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
                                   friction=CoulombSingle(phi=phi)))
     return scene, top, t
+
+
+def wedge_scene(penalty=1e7, law=None):
+    """A block sliding on a free 30 degree wedge that rests on a fixed floor.
+
+    The block's contacts lie on the wedge's moving edge, so g_n and g_s are nonlinear in the
+    unknowns (the geometric terms of the tangent matter); a soft penalty makes them large.
+    """
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    th = np.radians(30)
+    length = 2.0
+    floor = scene.add_block([(-1, -0.3), (3, -0.3), (3, 0), (-1, 0)], rock, fixed=True,
+                            name="floor")
+    wedge = scene.add_block([(0, 0), (length * np.cos(th), 0),
+                             (length * np.cos(th), length * np.sin(th))], rock, name="wedge")
+    t = np.array([np.cos(th), np.sin(th)])
+    n = np.array([-np.sin(th), np.cos(th)])
+    p0, a = 1.0 * t, 0.3
+    top = scene.add_block([p0, p0 + a * t, p0 + a * t + a * n, p0 + a * n], rock, name="top")
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
+                                  friction=law if law is not None else CoulombSingle(phi=20)))
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
+                                  friction=CoulombSingle(phi=45)), between=(floor, wedge))
+    return scene, wedge, top

@@ -55,7 +55,11 @@ def test_block_at_rest_on_base(rock):
     assert np.abs(result.rotation(top)).max() < 1e-9
 
 
-@pytest.mark.parametrize("solver", [dda.solvers.LegacyPullBack()], ids=["legacy"])
+SOLVERS = [dda.solvers.LegacyPullBack(), dda.solvers.NewtonRaphson()]
+SOLVER_IDS = ["legacy", "newton"]
+
+
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
 def test_incline_stick_holds(solver):
     scene, top, t = incline_scene(phi=40.0)
     result = dda.Simulation(scene, dt=1e-3, solver=solver).run(duration=1.0)
@@ -65,7 +69,7 @@ def test_incline_stick_holds(solver):
     assert np.ptp(late) < 1e-7  # no creep
 
 
-@pytest.mark.parametrize("solver", [dda.solvers.LegacyPullBack()], ids=["legacy"])
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
 def test_incline_slides_at_coulomb_acceleration(solver):
     scene, top, t = incline_scene(phi=20.0)
     result = dda.Simulation(scene, dt=1e-3, solver=solver).run(duration=1.0)
@@ -115,14 +119,15 @@ def _kinetic_energy(result, block, mass, inertia):
     return 0.5 * mass * (v[:, 0] ** 2 + v[:, 1] ** 2) + 0.5 * inertia * v[:, 2] ** 2
 
 
-def test_sliding_block_stops_at_coulomb_distance_and_stays(rock):
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_sliding_block_stops_at_coulomb_distance_and_stays(rock, solver):
     """v0^2 / (2 mu g): the slip must turn to stick when it would reverse."""
     scene = dda.Scene(gravity=G)
     base = scene.add_block(box(0, 0, 3, 0.2), rock, fixed=True, name="base")
     top = scene.add_block(box(0.2, 0.2, 0.2, 0.1), rock, velocity=(1.0, 0.0), name="top")
     scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
                                   friction=CoulombSingle(phi=30)))
-    result = dda.Simulation(scene, dt=1e-3).run(duration=0.6)
+    result = dda.Simulation(scene, dt=1e-3, solver=solver).run(duration=0.6)
     mu = np.tan(np.radians(30))
     stop = 1.0**2 / (2 * mu * G)
     x = result.displacement(top)[:, 0]
@@ -132,14 +137,15 @@ def test_sliding_block_stops_at_coulomb_distance_and_stays(rock):
     assert result.joint_force(base, top)[-1, 1] == pytest.approx(0.0, abs=1.0)
 
 
-def test_block_sliding_into_a_wall_gains_no_energy(rock):
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_block_sliding_into_a_wall_gains_no_energy(rock, solver):
     scene = dda.Scene(gravity=G)
     scene.add_block(box(0, 0, 2, 0.2), rock, fixed=True, name="floor")
     scene.add_block(box(0.75, 0.2, 0.1, 0.3), rock, fixed=True, name="wall")
     top = scene.add_block(box(0.5, 0.2, 0.24, 0.13), rock, velocity=(0.5, 0.0), name="top")
     scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
                                   friction=CoulombSingle(phi=31.6)))
-    result = dda.Simulation(scene, dt=1e-3).run(duration=0.5)
+    result = dda.Simulation(scene, dt=1e-3, solver=solver).run(duration=0.5)
     mass = rock.density * 0.24 * 0.13
     inertia = mass * (0.24**2 + 0.13**2) / 12
     energy = _kinetic_energy(result, top, mass, inertia)
@@ -200,3 +206,22 @@ def test_contact_moves_onto_the_next_edge_with_its_history(rock):
     assert d_split[-1, 0] > 0.06  # both corners (at 0.2 and 0.4) crossed a split
     np.testing.assert_allclose(d_split, d_plain, atol=1e-9)
     assert len(sim_split.state.contacts) == 2
+
+
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_soft_penalty_keeps_a_deep_contact(rock, solver):
+    """A penalty soft enough to let the block sink 3 mm must not lose the contact."""
+    scene = dda.Scene(gravity=G)
+    base = scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True)
+    top = scene.add_block(box(0.4, 0.2, 0.2, 0.2), rock)
+    pn = 1.5e5
+    scene.set_joint(JointMaterial(normal_penalty=pn, shear_penalty=pn,
+                                  friction=CoulombSingle(phi=30)))
+    # static DDA keeps the 2 M / dt^2 term: with a penalty this soft, dt must be large for it
+    # to settle in a few steps (2 M / dt^2 = 7e4 N/m here, against 3e5 N/m of springs)
+    result = dda.Simulation(scene, dt=0.05, analysis="static", solver=solver).run(2.0)
+    weight = rock.density * G * 0.04
+    assert result.joint_force(base, top)[-1, 0] == pytest.approx(weight, rel=1e-3)
+    sink = weight / (2 * pn)
+    assert sink > 2e-3
+    assert -result.displacement(top)[-1, 1] == pytest.approx(sink, rel=0.01)

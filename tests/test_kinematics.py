@@ -5,7 +5,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dda import geometry
-from dda.contact.kinematics import contact_geometry, first_variation_rows
+from dda.contact.kinematics import pair_maps, trial_kinematics
 
 
 def _moved(x, blocks, centroids, d):
@@ -14,40 +14,55 @@ def _moved(x, blocks, centroids, d):
     return x + np.einsum("vij,vj->vi", t, d[blocks])
 
 
-@settings(max_examples=100, deadline=None)
-@given(st.integers(0, 2**31 - 1))
-def test_gap_variations_match_finite_differences(seed):
-    rng = np.random.default_rng(seed)
-    # vertex of block 0 near edge of block 1; vertices: 0 = P1, 1..2 = its neighbours,
-    # block 1: 3 = P3 (edge start), 4 = P2 (edge end)
+def _random_contact(rng):
+    """A vertex (block 0) near an edge of block 1 and a random reference parameter xi0."""
     p3 = rng.uniform(-1, 1, 2)
     ang = rng.uniform(0, 2 * np.pi)
     length = rng.uniform(0.2, 2.0)
     p2 = p3 + length * np.array([np.cos(ang), np.sin(ang)])
-    xi = rng.uniform(0.05, 0.95)
     tau = (p3 - p2) / length
     n = np.array([-tau[1], tau[0]])
-    p1 = p2 + xi * (p3 - p2) + rng.uniform(-0.05, 0.05) * n
+    p1 = p2 + rng.uniform(0.05, 0.95) * (p3 - p2) + rng.uniform(-0.05, 0.05) * n
     x = np.array([p1, p1 + 0.3 * n + 0.1 * tau, p1 + 0.3 * n - 0.1 * tau,
                   p3, p2, p2 - 0.5 * n])
     blocks = np.array([0, 0, 0, 1, 1, 1])
     centroids = np.array([x[:3].mean(0), x[3:].mean(0)])
+    xi0 = np.array([rng.uniform(0.0, 1.0)])
+    return x, blocks, centroids, xi0
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.integers(0, 2**31 - 1))
+def test_second_variations_match_finite_differences(seed):
+    """E, I rows and the G, H, E', J bilinear forms as exact derivatives of g_n(d), g_s(d),
+    checked at a random trial state d (not only at d = 0)."""
+    rng = np.random.default_rng(seed)
+    x, blocks, centroids, xi0 = _random_contact(rng)
     vertex, edge, nxt = np.array([0]), np.array([3]), np.array([1, 2, 0, 4, 5, 3])
-    xi0 = np.array([xi + rng.uniform(-0.1, 0.1)])
+    maps = pair_maps(x, vertex, edge, nxt, centroids[[0]], centroids[[1]])
+    d0 = 0.02 * rng.normal(size=12)
 
-    def gaps(d):
-        xm = _moved(x, blocks, centroids, d)
-        g = contact_geometry(xm, vertex, edge, nxt)
-        return g.gap[0], g.shear_gap(xi0)[0]
+    def kin(dd, second=True):
+        xm = _moved(x, blocks, centroids, dd.reshape(2, 6))
+        return trial_kinematics(xm[vertex], xm[nxt[edge]], xm[edge], xi0, maps, second=second)
 
-    g0 = contact_geometry(x, vertex, edge, nxt)
-    e_row, i_row = first_variation_rows(g0, xi0, centroids[[0]], centroids[[1]])
-    direction = rng.normal(size=(2, 6))
+    k0 = kin(d0)
+    u, v = rng.normal(size=12), rng.normal(size=12)
     h = 1e-6
-    plus, minus = gaps(h * direction), gaps(-h * direction)
-    fd_n = (plus[0] - minus[0]) / (2 * h)
-    fd_s = (plus[1] - minus[1]) / (2 * h)
-    dd = direction.reshape(-1)
-    scale = np.abs(e_row[0]).sum() * np.abs(dd).max()
-    assert abs(e_row[0] @ dd - fd_n) <= 1e-6 * scale
-    assert abs(i_row[0] @ dd - fd_s) <= 1e-6 * (np.abs(i_row[0]).sum() * np.abs(dd).max())
+    kp, km = kin(d0 + h * v, False), kin(d0 - h * v, False)
+    # first variations
+    fd_gn = (kp.gap[0] - km.gap[0]) / (2 * h)
+    fd_gs = (kp.shear[0] - km.shear[0]) / (2 * h)
+    assert abs(k0.e_row[0] @ v - fd_gn) <= 1e-6 * np.abs(k0.e_row[0]).sum() * np.abs(v).max()
+    assert abs(k0.i_row[0] @ v - fd_gs) <= 1e-6 * np.abs(k0.i_row[0]).sum() * np.abs(v).max()
+    # second variations: derivative of the first variation rows along v, applied to u
+    fd_hn = ((kp.e_row[0] - km.e_row[0]) @ u) / (2 * h)
+    fd_hs = ((kp.i_row[0] - km.i_row[0]) @ u) / (2 * h)
+    an_hn = u @ k0.gn_hessian[0] @ v
+    an_hs = u @ k0.gs_hessian[0] @ v
+    scale_n = np.abs(k0.gn_hessian[0]).max() * np.abs(u).sum() * np.abs(v).sum()
+    scale_s = np.abs(k0.gs_hessian[0]).max() * np.abs(u).sum() * np.abs(v).sum()
+    assert abs(an_hn - fd_hn) <= 1e-6 * scale_n
+    assert abs(an_hs - fd_hs) <= 1e-6 * scale_s
+    # symmetric, as second derivatives are
+    np.testing.assert_allclose(k0.gn_hessian[0], k0.gn_hessian[0].T, atol=1e-14 * scale_n)

@@ -1,7 +1,19 @@
 """Contacts: detection, kinematics, the contact element, joints and friction laws."""
 
 from dda.contact.element import ContactElement
-from dda.contact.friction import CoulombSingle, FrictionLaw, FrictionTrial
+from dda.contact.friction import (
+    CoulombSingle,
+    FrictionLaw,
+    FrictionTrial,
+    StaticDynamicTransition,
+)
 from dda.contact.joint import JointMaterial
 
-__all__ = ["ContactElement", "CoulombSingle", "FrictionLaw", "FrictionTrial", "JointMaterial"]
+__all__ = [
+    "ContactElement",
+    "CoulombSingle",
+    "FrictionLaw",
+    "FrictionTrial",
+    "JointMaterial",
+    "StaticDynamicTransition",
+]

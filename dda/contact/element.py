@@ -16,7 +16,8 @@ from dda.contact.friction import FrictionLaw
 from dda.contact.kinematics import (
     ContactGeometry,
     contact_geometry,
-    first_variation_rows,
+    pair_maps,
+    trial_kinematics,
     tributary_length,
 )
 
@@ -48,14 +49,18 @@ class LawGroups:
     def _select(self, history, law, idx):
         return {k: history[k][idx] for k in law.history_fields()}
 
-    def return_map(self, history, delta_g_s, t_n, shear_penalty, length, where=None):
+    def return_map(self, history, delta_g_s, t_n, shear_penalty, length, where=None,
+                   normal_penalty=None):
         """Return map of every contact (or those in ``where``) through its own law.
 
-        Returns shear force, slipping flag and the trial history as full-length arrays.
+        Returns shear force, slipping flag and the trial history as full-length arrays; with
+        ``normal_penalty`` given, also the consistent tangent (d t_s/d g_s, d t_s/d g_n).
         """
         m = len(delta_g_s)
         t_s = np.zeros(m)
         slipping = np.zeros(m, dtype=bool)
+        dts_dgs = np.zeros(m)
+        dts_dgn = np.zeros(m)
         trial_history = {k: v.copy() for k, v in history.items()}
         for law, idx in self.groups:
             if where is not None:
@@ -70,6 +75,11 @@ class LawGroups:
             slipping[idx] = trial.slipping
             for k, v in law.commit(trial).items():
                 trial_history[k][idx] = v
+            if normal_penalty is not None:
+                dts_dgs[idx], dts_dgn[idx] = law.tangent(trial, normal_penalty[idx],
+                                                         shear_penalty[idx])
+        if normal_penalty is not None:
+            return t_s, slipping, trial_history, (dts_dgs, dts_dgn)
         return t_s, slipping, trial_history
 
     def elastic_update(self, history, delta_g_s, where):
@@ -84,8 +94,25 @@ class LawGroups:
         return out
 
 
+@dataclass
+class ContactResponse:
+    """Forces, states and the linearization of every contact at one trial state."""
+
+    closed: np.ndarray
+    slipping: np.ndarray
+    t_n: np.ndarray
+    t_s: np.ndarray
+    history: dict[str, np.ndarray]
+    residual: np.ndarray
+    stiffness: np.ndarray
+
+
 class ContactElement:
-    """Vertex-edge penalty contacts of one step, linearized about the step's start.
+    """Vertex-edge penalty contacts of one step.
+
+    Legacy DDA uses the rows linearized at the step's start (:meth:`linear_gaps`,
+    :meth:`legacy_contributions`); the fully implicit method evaluates the contacts exactly at
+    every trial state with the consistent tangent (:meth:`response`).
 
     Parameters
     ----------
@@ -109,10 +136,13 @@ class ContactElement:
         geom: ContactGeometry = contact_geometry(x, contacts.vertex, contacts.edge, nxt)
         self.geometry = geom
         self.gap0 = geom.gap
+        self.shear0 = geom.shear_gap(contacts.xi0)
         self.length = tributary_length(x, contacts.vertex, geom, prv, nxt)
-        self.e_row, self.i_row = first_variation_rows(
-            geom, contacts.xi0, centroids[contacts.bj], centroids[contacts.bk]
-        )
+        self.maps = pair_maps(x, contacts.vertex, contacts.edge, nxt, centroids[contacts.bj],
+                              centroids[contacts.bk])
+        start = trial_kinematics(geom.p1, geom.p2, geom.p3, contacts.xi0, self.maps,
+                                 second=False)
+        self.e_row, self.i_row = start.e_row, start.i_row
 
     def __len__(self):
         return len(self.bj)
@@ -151,3 +181,38 @@ class ContactElement:
         fs = np.where(stick, ks * g_se, 0.0) + np.where(slip, t_s_slip, 0.0)
         f = -(fn[:, None] * e + fs[:, None] * i)
         return k, f
+
+    def response(self, d: np.ndarray) -> ContactResponse:
+        """Contact forces and consistent tangent at the trial increments d (METHOD.md s. 3-4).
+
+        The trial positions are ``X + T(X) d``. Per closed contact (g_n < 0), with the law's
+        return map giving t_s and its tangent (k_ss, k_sn):
+
+            r = t_n E^T + t_s I^T
+            K = p_n E^T E + t_n (Delta delta g_n) + I^T (k_ss I + k_sn E) + t_s (Delta delta g_s)
+
+        k_sn couples the normal and the shear gap on a slipping contact (unsymmetric K).
+        Every trial starts from the committed history, so nothing here needs undoing.
+        """
+        dd = self.pair_increments(d)
+        a1, a2, a3 = self.maps
+        g = self.geometry
+        p1 = g.p1 + np.einsum("mij,mj->mi", a1, dd)
+        p2 = g.p2 + np.einsum("mij,mj->mi", a2, dd)
+        p3 = g.p3 + np.einsum("mij,mj->mi", a3, dd)
+        kin = trial_kinematics(p1, p2, p3, self.contacts.xi0, self.maps, second=True)
+        closed = kin.gap < 0.0
+        pn, ps = self.normal_penalty, self.shear_penalty
+        t_n = np.where(closed, pn * kin.gap, 0.0)
+        dgs = kin.shear - self.shear0
+        t_s, slipping, history, (kss, ksn) = self.laws.return_map(
+            self.contacts.history, dgs, t_n, ps, self.length, where=closed, normal_penalty=pn)
+        e, i = kin.e_row, kin.i_row
+        residual = t_n[:, None] * e + t_s[:, None] * i
+        kn = np.where(closed, pn, 0.0)
+        stiffness = kn[:, None, None] * (e[:, :, None] * e[:, None, :])
+        shear_row = kss[:, None] * i + ksn[:, None] * e
+        stiffness += np.where(closed[:, None, None], i[:, :, None] * shear_row[:, None, :], 0.0)
+        stiffness += t_n[:, None, None] * kin.gn_hessian + t_s[:, None, None] * kin.gs_hessian
+        return ContactResponse(closed, slipping & closed, t_n, t_s, history, residual,
+                               stiffness)

@@ -14,7 +14,7 @@ import numpy as np
 
 from dda._checks import finite_number
 
-__all__ = ["FrictionLaw", "FrictionTrial", "CoulombSingle"]
+__all__ = ["FrictionLaw", "FrictionTrial", "CoulombSingle", "StaticDynamicTransition"]
 
 
 @dataclass
@@ -148,3 +148,77 @@ class CoulombSingle(FrictionLaw):
         dts_dgs = np.where(trial.slipping, 0.0, shear_penalty)
         dts_dgn = np.where(trial.slipping, -normal_penalty * self.mu * np.sign(trial.t_s), 0.0)
         return dts_dgs, dts_dgn
+
+
+class StaticDynamicTransition(FrictionLaw):
+    """Coulomb friction that drops from a static to a dynamic angle (METHOD.md section 6).
+
+    - A sticking contact yields when ``|t_s^tr| > |t_n| tan(phi_static)``; the trial is then
+      returned to the dynamic strength ``|t_n| tan(phi_dynamic)`` at once (S figure 1).
+    - While it keeps sliding, the yield check uses ``phi_dynamic``.
+    - A contact that sticks again must exceed ``phi_static`` to slide once more.
+
+    The history field ``sliding`` (1.0 or 0.0) records whether the contact was sliding at the
+    end of the last committed step.
+
+    Parameters
+    ----------
+    phi_static, phi_dynamic : float
+        Friction angles in degrees, 0 <= phi_dynamic <= phi_static < 90.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> law = StaticDynamicTransition(phi_static=30.0, phi_dynamic=20.0)
+    >>> state = law.initial_state(1)
+    >>> yielded = law.return_map(state, np.array([1.0]), np.array([-1.0]), np.array([1.0]),
+    ...                          np.ones(1))
+    >>> round(float(yielded.t_s[0]), 4), bool(yielded.slipping[0])  # tan(20 deg)
+    (0.364, True)
+    """
+
+    def __init__(self, phi_static: float, phi_dynamic: float):
+        where = "StaticDynamicTransition"
+        phi_s = finite_number("phi_static", phi_static, nonnegative=True, where=where)
+        phi_d = finite_number("phi_dynamic", phi_dynamic, nonnegative=True, where=where)
+        if phi_s >= 90.0:
+            raise ValueError(f"{where}: phi_static is in degrees and must be below 90, got {phi_s}")
+        if phi_d > phi_s:
+            raise ValueError(
+                f"{where}: phi_dynamic ({phi_d}) must not exceed phi_static ({phi_s})")
+        self.phi_static, self.phi_dynamic = phi_s, phi_d
+        self.mu_static = float(np.tan(np.radians(phi_s)))
+        self.mu_dynamic = float(np.tan(np.radians(phi_d)))
+
+    def __repr__(self):
+        return (f"StaticDynamicTransition(phi_static={self.phi_static}, "
+                f"phi_dynamic={self.phi_dynamic})")
+
+    def history_fields(self) -> dict[str, float]:
+        return {"g_se": 0.0, "slip": 0.0, "sliding": 0.0}
+
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
+        t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
+        pressure = np.maximum(-t_n, 0.0)
+        sliding = committed["sliding"] > 0.5
+        check = pressure * np.where(sliding, self.mu_dynamic, self.mu_static)
+        slipping = np.abs(t_trial) > check
+        dynamic = pressure * self.mu_dynamic
+        t_s = np.where(slipping, dynamic * np.sign(t_trial), t_trial)
+        state = {
+            "g_se": t_s / shear_penalty,
+            "slip": committed["slip"] + np.abs(t_trial - t_s) / shear_penalty,
+            "sliding": slipping.astype(float),
+        }
+        return FrictionTrial(t_s=t_s, slipping=slipping, strength=check, state=state)
+
+    def tangent(self, trial, normal_penalty, shear_penalty):
+        dts_dgs = np.where(trial.slipping, 0.0, shear_penalty)
+        dts_dgn = np.where(trial.slipping,
+                           -normal_penalty * self.mu_dynamic * np.sign(trial.t_s), 0.0)
+        return dts_dgs, dts_dgn
+
+    def elastic_update(self, committed, delta_g_s):
+        state = super().elastic_update(committed, delta_g_s)
+        state["sliding"] = np.zeros_like(state["g_se"])
+        return state

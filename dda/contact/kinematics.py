@@ -8,7 +8,8 @@ For vertex P1 (block j) against the reversed edge P2P3 of block k:
     E = n^T [T_j(x1), -T_k(x0)]                                               (H20-H22)
     I = tau^T [T_j(x1), -T_k(x0')] + (g_n / l) n^T [0, T_k(x3) - T_k(x2)]     (H29-H31)
 
-so that ``delta g_n = E [d_j; d_k]`` and ``delta g_s = I [d_j; d_k]`` to first order.
+so that ``delta g_n = E [d_j; d_k]`` and ``delta g_s = I [d_j; d_k]`` to first order; the
+second variations are in :func:`trial_kinematics`.
 """
 
 from __future__ import annotations
@@ -19,7 +20,15 @@ import numpy as np
 
 from dda.geometry import t_matrix
 
-__all__ = ["ContactGeometry", "contact_geometry", "first_variation_rows", "tributary_length"]
+__all__ = [
+    "ContactGeometry",
+    "TrialKinematics",
+    "contact_frame",
+    "contact_geometry",
+    "pair_maps",
+    "trial_kinematics",
+    "tributary_length",
+]
 
 
 @dataclass
@@ -46,9 +55,11 @@ class ContactGeometry:
 
 def contact_geometry(x: np.ndarray, vertex: np.ndarray, edge: np.ndarray, nxt: np.ndarray):
     """Contact frame of vertex ``vertex`` against the reversed CCW edge ``edge -> nxt[edge]``."""
-    p1 = x[vertex]
-    p2 = x[nxt[edge]]
-    p3 = x[edge]
+    return contact_frame(x[vertex], x[nxt[edge]], x[edge])
+
+
+def contact_frame(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> ContactGeometry:
+    """Contact frame of points P1 (vertex) and P2 -> P3 (edge), each (m, 2)."""
     d = p3 - p2
     length = np.hypot(d[:, 0], d[:, 1])
     tau = d / length[:, None]
@@ -59,30 +70,88 @@ def contact_geometry(x: np.ndarray, vertex: np.ndarray, edge: np.ndarray, nxt: n
     return ContactGeometry(p1, p2, p3, length, tau, normal, gap, xi)
 
 
-def first_variation_rows(
-    geom: ContactGeometry, xi0: np.ndarray, cj: np.ndarray, ck: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The E and I rows (m, 12) of every contact: d g_n = E [d_j; d_k], d g_s = I [d_j; d_k].
+@dataclass
+class TrialKinematics:
+    """Gaps, their first variations (rows) and second variations (12 x 12) at a trial state.
+
+    The trial configuration is ``x = X + T(X) d``: T is taken at the step's start positions X,
+    so the variations are exact derivatives of g_n(d) and g_s(d) (METHOD.md section 3).
+    """
+
+    gap: np.ndarray
+    shear: np.ndarray
+    xi: np.ndarray
+    length: np.ndarray
+    normal: np.ndarray
+    tau: np.ndarray
+    e_row: np.ndarray
+    i_row: np.ndarray
+    gn_hessian: np.ndarray | None
+    gs_hessian: np.ndarray | None
+
+
+def pair_maps(x_ref, vertex, edge, nxt, cj, ck):
+    """Rows mapping [d_j; d_k] (12) to the motion of P1, P2 and P3: three (m, 2, 12) arrays."""
+    m = len(vertex)
+    a1 = np.zeros((m, 2, 12))
+    a2 = np.zeros((m, 2, 12))
+    a3 = np.zeros((m, 2, 12))
+    a1[:, :, :6] = t_matrix(x_ref[vertex], cj)
+    a2[:, :, 6:] = t_matrix(x_ref[nxt[edge]], ck)
+    a3[:, :, 6:] = t_matrix(x_ref[edge], ck)
+    return a1, a2, a3
+
+
+def trial_kinematics(p1, p2, p3, xi0, maps, second=True) -> TrialKinematics:
+    """Contact kinematics of the configuration ``x`` (METHOD.md section 3, H17-H35).
+
+    With ``a = x1 - x2``, ``b = x3 - x2``, ``l = |b|``, the rows below act on [d_j; d_k]:
+
+        E  = n . (da - xi db)        G  = tau . (da - xi db)
+        E' = n . (da - xi0 db)       G' = tau . (da - xi0 db)
+        H  = n . db                  J  = tau . db
+        delta g_n = E,               delta g_s = I = G' + (g_n / l) H
+        Delta delta g_n = -(1/l) [G^T H + H^T G + (g_n/l) H^T H]
+        Delta delta g_s =  (1/l) [E'^T H + H^T E' - (g_n/l)(H^T J + J^T H) - (g_s/l) H^T H]
+
+    derived from g_n = (b x a) / l and g_s = a . b / l - xi0 l (the scanned paper prints the
+    sign of the H^T H term of Delta delta g_n the other way; tests/test_kinematics.py checks
+    every one of these against finite differences).
 
     Parameters
     ----------
-    geom : ContactGeometry
-    xi0 : (m,) edge parameter of the shear reference point x0'
-    cj, ck : (m, 2) centroids of the vertex's block j and of the edge's block k
+    p1, p2, p3 : (m, 2) trial positions of the vertex and of the (reversed) edge's ends
+    xi0 : (m,) shear reference parameter
+    maps : the three (m, 2, 12) arrays of :func:`pair_maps` (start-of-step positions)
+    second : also compute the second variations
     """
-    tj1 = t_matrix(geom.p1, cj)
-    tk0 = t_matrix(geom.point(geom.xi), ck)
-    tk0r = t_matrix(geom.point(xi0), ck)
-    dtk = t_matrix(geom.p3, ck) - t_matrix(geom.p2, ck)
-    n, tau = geom.normal, geom.tau
-    e_row = np.concatenate(
-        [np.einsum("mi,mij->mj", n, tj1), -np.einsum("mi,mij->mj", n, tk0)], axis=1
-    )
-    geo = (geom.gap / geom.length)[:, None] * np.einsum("mi,mij->mj", n, dtk)
-    i_row = np.concatenate(
-        [np.einsum("mi,mij->mj", tau, tj1), geo - np.einsum("mi,mij->mj", tau, tk0r)], axis=1
-    )
-    return e_row, i_row
+    geom = contact_frame(p1, p2, p3)
+    a1, a2, a3 = maps
+    n, tau, length, gap, xi = geom.normal, geom.tau, geom.length, geom.gap, geom.xi
+    shear = geom.shear_gap(xi0)
+    da = a1 - a2
+    db = a3 - a2
+    rel = da - xi[:, None, None] * db
+    rel0 = da - xi0[:, None, None] * db
+    e_row = np.einsum("mi,mij->mj", n, rel)
+    h_row = np.einsum("mi,mij->mj", n, db)
+    g0_row = np.einsum("mi,mij->mj", tau, rel0)
+    i_row = g0_row + (gap / length)[:, None] * h_row
+    gn_h = gs_h = None
+    if second:
+        g_row = np.einsum("mi,mij->mj", tau, rel)
+        e0_row = np.einsum("mi,mij->mj", n, rel0)
+        j_row = np.einsum("mi,mij->mj", tau, db)
+
+        def sym(u, v):
+            return u[:, :, None] * v[:, None, :] + v[:, :, None] * u[:, None, :]
+
+        hh = h_row[:, :, None] * h_row[:, None, :]
+        inv_l = (1.0 / length)[:, None, None]
+        gn_h = -inv_l * (sym(g_row, h_row) + (gap / length)[:, None, None] * hh)
+        gs_h = inv_l * (sym(e0_row, h_row) - (gap / length)[:, None, None] * sym(h_row, j_row)
+                        - (shear / length)[:, None, None] * hh)
+    return TrialKinematics(gap, shear, xi, length, n, tau, e_row, i_row, gn_h, gs_h)
 
 
 def tributary_length(

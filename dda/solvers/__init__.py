@@ -2,5 +2,6 @@
 
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.legacy import LegacyPullBack
+from dda.solvers.newton import NewtonRaphson
 
-__all__ = ["LegacyPullBack", "NonlinearSolver", "StepProblem", "StepSolution"]
+__all__ = ["LegacyPullBack", "NewtonRaphson", "NonlinearSolver", "StepProblem", "StepSolution"]

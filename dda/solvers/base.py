@@ -56,6 +56,7 @@ class StepSolution:
     iterations: int = 0
     reason: str = ""
     residual_norms: list[float] = field(default_factory=list)
+    search_hint: float = 0.0
 
 
 class NonlinearSolver(ABC):

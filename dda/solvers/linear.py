@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["assemble_and_solve", "DENSE_LIMIT"]
+__all__ = ["assemble_and_solve", "assemble_vector", "DENSE_LIMIT"]
 
 DENSE_LIMIT = 300
 
@@ -85,3 +85,16 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known):
         raise SingularSystemError("the step's system has no finite solution")
     d[free_blocks] = sol.reshape(-1, 6)
     return d
+
+
+def assemble_vector(block_f, free, bj, bk, pair_f):
+    """Add per-contact vectors (m, 12) on [d_j; d_k] to per-block vectors (n_blocks, 6).
+
+    Rows of blocks without unknowns are set to zero (their forces are reactions).
+    """
+    out = block_f.copy()
+    if len(bj):
+        np.add.at(out, bj, pair_f[:, :6])
+        np.add.at(out, bk, pair_f[:, 6:])
+    out[~free] = 0.0
+    return out

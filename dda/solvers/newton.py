@@ -1,0 +1,125 @@
+"""The fully implicit DDA step: OPEN-CLOSE, then Newton-Raphson (METHOD.md section 5, H Fig 5).
+
+After the OPEN-CLOSE iteration has found the contact states, Newton iterations solve the
+nonlinear balance of the step
+
+    R(d) = K~ d - F~ + sum_c [t_n E^T + t_s I^T](d) = 0
+
+with the contact forces evaluated exactly at every trial state (gaps from the moved geometry,
+shear force from the friction law's return map built from the committed history) and the
+consistent tangent of :meth:`dda.contact.ContactElement.response` (geometric terms and the
+unsymmetric slip coupling included), until the out-of-balance force is below ``tol`` times the
+size of the forces in play (or has reached the round-off floor of a stiff penalty system:
+below 1e-6 of the forces and no longer decreasing). Converged: quadratic. Not converged in
+``max_iter``: the step is reported failed and the simulation retries it with a smaller dt.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dda._checks import finite_number
+from dda.contact.contacts import OPEN, SLIP, STICK, ContactSet
+from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
+from dda.solvers.linear import SingularSystemError, assemble_and_solve, assemble_vector
+from dda.solvers.open_close import open_close
+
+__all__ = ["NewtonRaphson"]
+
+# residuals below this fraction of the forces that stop decreasing are round-off
+ROUND_OFF = 1e-6
+
+
+class NewtonRaphson(NonlinearSolver):
+    """Fully implicit DDA: return mapping and Newton-Raphson with the consistent tangent.
+
+    Parameters
+    ----------
+    tol : float
+        Convergence when ``|R| <= tol * max(|F~|, |contact forces|, |K~ d|)`` over the free
+        unknowns (2-norm).
+    max_iter : int
+        Newton iterations allowed after OPEN-CLOSE before the step is cut.
+
+    Examples
+    --------
+    >>> from dda.solvers import NewtonRaphson
+    >>> NewtonRaphson(tol=1e-10, max_iter=30)
+    NewtonRaphson(tol=1e-10, max_iter=30)
+    """
+
+    name = "newton"
+
+    def __init__(self, tol: float = 1e-9, max_iter: int = 25):
+        self.tol = finite_number("tol", tol, positive=True, where="NewtonRaphson")
+        if int(max_iter) != max_iter or max_iter < 1:
+            raise ValueError(f"NewtonRaphson: max_iter must be a positive integer, got {max_iter}")
+        self.max_iter = int(max_iter)
+
+    def __repr__(self):
+        return f"NewtonRaphson(tol={self.tol:g}, max_iter={self.max_iter})"
+
+    def solve_step(self, problem: StepProblem) -> StepSolution:
+        oc = open_close(problem, explicit=False)
+        if not oc.converged:
+            return StepSolution(None, None, False, oc.passes, 0, oc.reason)
+        sol = self.iterate(problem, oc.d)
+        sol.open_close_passes = oc.passes
+        return sol
+
+    def iterate(self, problem: StepProblem, d: np.ndarray) -> StepSolution:
+        """Newton-Raphson iterations of one step from the increments ``d`` (n_blocks, 6).
+
+        The known blocks' rows of ``d`` must equal ``problem.d_known``. Returns the converged
+        trial, or a failed solution whose ``residual_norms`` show what happened.
+        """
+        el = problem.element
+        c = el.contacts
+        free = problem.free
+        d = d.copy()
+        norms: list[float] = []
+        zero_known = np.zeros_like(problem.d_known)
+        for it in range(self.max_iter + 1):
+            resp = el.response(d)
+            inertia = np.einsum("bij,bj->bi", problem.block_k, d)
+            block_r = inertia - problem.block_f
+            r = assemble_vector(block_r, free, el.bj, el.bk, resp.residual)
+            contact = assemble_vector(np.zeros_like(block_r), free, el.bj, el.bk,
+                                      np.abs(resp.residual))
+            norm = float(np.linalg.norm(r[free]))
+            scale = max(float(np.linalg.norm(problem.block_f[free])),
+                        float(np.linalg.norm(inertia[free])),
+                        float(np.linalg.norm(contact[free])), 1e-300)
+            norms.append(norm)
+            if norm <= self.tol * scale or _at_round_off(norms, scale):
+                break
+            if not np.isfinite(norm):
+                return StepSolution(None, None, False, 0, it,
+                                    "Newton-Raphson diverged (non-finite residual)", norms)
+            if it == self.max_iter:
+                return StepSolution(None, None, False, 0, it, (
+                    f"Newton-Raphson did not converge in {self.max_iter} iterations "
+                    f"(|R| = {norm:.3g}, {norm / scale:.3g} of the forces)"), norms)
+            try:
+                step = assemble_and_solve(problem.block_k, -block_r, free, el.bj, el.bk,
+                                          resp.stiffness, -resp.residual, zero_known)
+            except SingularSystemError as exc:
+                return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
+            d = d + step
+        state = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN).astype(np.int8)
+        history = resp.history
+        el.laws.initial_history(history, ~resp.closed)
+        trial = ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), resp.t_n,
+                           resp.t_s, history)
+        return StepSolution(d, trial, True, 0, it, "", norms)
+
+
+def _at_round_off(norms, scale) -> bool:
+    """The residual is as small as round-off allows: tiny, and no longer decreasing.
+
+    With penalties of 1e10 and more the system's condition number puts the floor of |R| near
+    1e-12 of the forces; a ``tol`` below that would otherwise cut the step for nothing.
+    """
+    if len(norms) < 3 or norms[-1] > ROUND_OFF * scale:
+        return False
+    return norms[-1] > 0.5 * min(norms[:-1])

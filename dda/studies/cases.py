@@ -1,0 +1,63 @@
+"""Scene builders of the paper cases (METHOD.md section 9), shared by examples and tests."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.materials import LinearElastic
+
+__all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH"]
+
+#: contact length of the shear-box cases (the upper block's width), m
+SHEAR_BOX_LENGTH = 0.1
+
+
+def shear_box(shear: float, friction=None, normal_stress: float = 1e6, young: float = 1e9,
+              poisson: float = 0.2, penalty: float = 10e9, consolidation: float = 0.0,
+              loading_stiffness: float = 1e8):
+    """Two elastic blocks sheared along their joint under a constant normal stress.
+
+    The direct-shear case of H 3(1) and the simple-shear case of S 3(1): a lower block
+    150 x 100 mm (fixed) and an upper block 100 x 100 mm centred on it (the 25/100/25 mm
+    layout of S figure 7). The normal stress acts on the upper block's top face (two point
+    loads at its corners). The upper block's two lower corners are driven to the right by
+    ``shear`` metres over one second, each through a spring of ``loading_stiffness`` N/m in
+    x (y free). The springs stand for the loading system's compliance, so the shear stress
+    rises over several steps as in the papers' figures; acting at the level of the joint they
+    put no moment on the block, so both joint contacts carry the same normal and shear force
+    and yield together (pushed at its top, a block this tall would tip over its front corner
+    at P/N = w / 2h = 0.5 < tan 30 deg). The shear starts after ``consolidation`` seconds
+    under the normal stress alone. Run it as a static
+    analysis with ``dt = 1 / n`` and ``consolidation = dt`` for n shear steps after one
+    consolidation step, for ``1 + dt`` seconds.
+
+    Returns
+    -------
+    scene, lower, upper
+    """
+    rock = LinearElastic(young=young, poisson=poisson, density=2500.0)
+    scene = dda.Scene()
+    lower = scene.add_block([(0, 0), (0.15, 0), (0.15, 0.1), (0, 0.1)], rock, fixed=True,
+                            name="lower")
+    top_left, top_right = (0.025, 0.2), (0.125, 0.2)
+    upper = scene.add_block([(0.025, 0.1), (0.125, 0.1), top_right, top_left], rock,
+                            name="upper")
+    force = normal_stress * SHEAR_BOX_LENGTH / 2
+    for corner in (top_left, top_right):
+        scene.add_point_load(upper, point=corner, force=(0.0, -force))
+    scene.prescribe_motion(upper, displacement=lambda t: (shear * max(t - consolidation, 0.0),
+                                                          None),
+                           penalty=loading_stiffness, points=[(0.025, 0.1), (0.125, 0.1)])
+    if friction is None:
+        friction = CoulombSingle(phi=30.0)
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
+                                  friction=friction))
+    return scene, lower, upper
+
+
+def shear_stress(result, lower, upper) -> np.ndarray:
+    """Shear stress on the joint (Pa), positive when it resists the upper block moving right:
+    the pair's shear force over the contact length."""
+    return -result.joint_force(lower, upper)[:, 1] / SHEAR_BOX_LENGTH
