@@ -10,8 +10,8 @@ Examples
 >>> from dda.geometry import polygon_integrals
 >>> square = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
 >>> ints = polygon_integrals(square, np.array([0, 4]))
->>> float(ints.area[0]), ints.centroid[0].tolist(), float(ints.sxx[0])
-(4.0, [1.0, 1.0], 1.3333333333333333)
+>>> float(ints.area[0]), ints.centroid[0].tolist(), round(float(ints.sxx[0]), 12)
+(4.0, [1.0, 1.0], 1.333333333333)
 """
 
 from __future__ import annotations

@@ -21,8 +21,8 @@ from dda.contact.element import ContactElement, LawGroups
 from dda.result import Frame, Result
 from dda.scene import Scene
 from dda.solvers.base import NonlinearSolver, StepProblem
-from dda.solvers.legacy import LegacyPullBack
 from dda.solvers.newmark import effective_system, updated_velocity
+from dda.solvers.newton import NewtonRaphson
 
 __all__ = ["Simulation", "SimulationError"]
 
@@ -69,7 +69,8 @@ class Simulation:
     dt : float
         Step size (s). Steps are cut when a step does not converge and grow back afterwards.
     solver : NonlinearSolver, optional
-        How one step is solved; ``LegacyPullBack()`` by default.
+        How one step is solved: ``NewtonRaphson()`` (the default, fully implicit) or
+        ``LegacyPullBack()`` (original DDA).
     analysis : {"dynamic", "static"}
         "static" sets the velocity to zero at the start of every step (METHOD.md section 2).
     velocity_carry : float
@@ -100,7 +101,7 @@ class Simulation:
             raise TypeError(f"Simulation: scene must be a dda.Scene, got {scene!r}")
         self.dt = finite_number("dt", dt, positive=True, where="Simulation")
         if solver is None:
-            solver = LegacyPullBack()
+            solver = NewtonRaphson()
         if not isinstance(solver, NonlinearSolver):
             raise TypeError(f"Simulation: solver must be a NonlinearSolver, got {solver!r}")
         if analysis not in ("dynamic", "static"):

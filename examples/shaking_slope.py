@@ -15,6 +15,7 @@ Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` (open in ParaView or pyvista) and
 ``OUT/slide.png``, and prints the slide at the end.
 
 Run:  python examples/shaking_slope.py [--out DIR] [--duration S] [--dt S] [--phi DEG]
+                                       [--solver newton|legacy]
 """
 
 from __future__ import annotations
@@ -128,11 +129,15 @@ def main(argv=None):
     ap.add_argument("--dt", type=float, default=1e-3, help="time step, s")
     ap.add_argument("--phi", type=float, default=31.6, help="joint friction angle, degrees")
     ap.add_argument("--peak", type=float, default=670.0, help="last amplitude step, gal")
+    ap.add_argument("--solver", choices=["newton", "legacy"], default="newton",
+                    help="fully implicit Newton-Raphson (default) or legacy DDA")
     args = ap.parse_args(argv)
     out = Path(args.out)
     scene, lower, upper = build_scene(args.phi, args.peak)
     writer = dda.io.VTUWriter(out / "slope", every=max(1, int(round(0.02 / args.dt))))
-    sim = dda.Simulation(scene, dt=args.dt)
+    solver = dda.solvers.NewtonRaphson() if args.solver == "newton" else \
+        dda.solvers.LegacyPullBack()
+    sim = dda.Simulation(scene, dt=args.dt, solver=solver)
     result = sim.run(args.duration, output=writer, progress=sys.stderr.isatty())
     accel = table_acceleration(args.peak)
     plot(result, lower, upper, accel, out / "slide.png")

@@ -10,6 +10,8 @@ from dda.materials import LinearElastic
 from tests.conftest import box, incline_scene
 
 G = 9.81
+SOLVERS = [dda.solvers.LegacyPullBack(), dda.solvers.NewtonRaphson()]
+SOLVER_IDS = ["legacy", "newton"]
 
 
 def test_free_fall_is_exact():
@@ -37,13 +39,14 @@ def test_free_spin_keeps_area_and_speed():
     assert np.abs(result.displacement(b)).max() < 1e-9
 
 
-def test_block_at_rest_on_base(rock):
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_block_at_rest_on_base(rock, solver):
     scene = dda.Scene(gravity=G)
     base = scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True, name="base")
     top = scene.add_block(box(0.4, 0.2, 0.2, 0.2), rock, name="top")
     scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
                                   friction=CoulombSingle(phi=36.4)))
-    result = dda.Simulation(scene, dt=1e-3, record_every=100).run(duration=10.0)
+    result = dda.Simulation(scene, dt=1e-3, record_every=100, solver=solver).run(duration=10.0)
     d = result.displacement(top)
     settle = d[len(d) // 10 :]
     assert np.ptp(settle, axis=0).max() < 1e-6  # no drift once settled
@@ -53,10 +56,6 @@ def test_block_at_rest_on_base(rock):
     assert force[-1, 0] == pytest.approx(weight, rel=1e-3)
     assert abs(force[-1, 1]) < 1e-6 * weight
     assert np.abs(result.rotation(top)).max() < 1e-9
-
-
-SOLVERS = [dda.solvers.LegacyPullBack(), dda.solvers.NewtonRaphson()]
-SOLVER_IDS = ["legacy", "newton"]
 
 
 @pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
@@ -94,14 +93,15 @@ def _column_settlement(k, n, rho, h, young, pn):
     return s
 
 
-def test_column_of_ten_blocks_stands(rock):
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_column_of_ten_blocks_stands(rock, solver):
     scene = dda.Scene(gravity=G)
     base = scene.add_block(box(-1, -0.5, 3, 0.5), rock, fixed=True)
     blocks = [scene.add_block(box(0, 0.3 * i, 1, 0.3), rock) for i in range(10)]
     pn = 1e10
     scene.set_joint(JointMaterial(normal_penalty=pn, shear_penalty=pn,
                                   friction=CoulombSingle(phi=30)))
-    result = dda.Simulation(scene, dt=2e-3).run(duration=5.0)
+    result = dda.Simulation(scene, dt=2e-3, solver=solver).run(duration=5.0)
     weight = rock.density * G * 0.3 * 10
     for k, b in enumerate(blocks):
         d = result.displacement(b)
@@ -186,23 +186,24 @@ def test_velocity_carry_ratio_scales_the_velocity_each_step(carry):
                                rtol=1e-12, atol=1e-15)
 
 
-def _slide_over(base_top_vertices, rock):
+def _slide_over(base_top_vertices, rock, solver):
     scene = dda.Scene(gravity=G)
     scene.add_block(base_top_vertices, rock, fixed=True, name="base")
     top = scene.add_block(box(0.2, 0.2, 0.2, 0.1), rock, velocity=(1.0, 0.0), name="top")
     scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
                                   friction=CoulombSingle(phi=30)))
-    sim = dda.Simulation(scene, dt=1e-3)
+    sim = dda.Simulation(scene, dt=1e-3, solver=solver)
     return sim, sim.run(duration=0.3).displacement(top)
 
 
-def test_contact_moves_onto_the_next_edge_with_its_history(rock):
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_contact_moves_onto_the_next_edge_with_its_history(rock, solver):
     """A base whose top face is split into collinear edges at x = 0.25 and 0.45 behaves like
     one face: the contacts move onto the next edge and keep their state and shear history."""
     plain = [(0, 0), (3, 0), (3, 0.2), (0, 0.2)]
     split = [(0, 0), (3, 0), (3, 0.2), (0.45, 0.2), (0.25, 0.2), (0, 0.2)]
-    sim_plain, d_plain = _slide_over(plain, rock)
-    sim_split, d_split = _slide_over(split, rock)
+    sim_plain, d_plain = _slide_over(plain, rock, solver)
+    sim_split, d_split = _slide_over(split, rock, solver)
     assert d_split[-1, 0] > 0.06  # both corners (at 0.2 and 0.4) crossed a split
     np.testing.assert_allclose(d_split, d_plain, atol=1e-9)
     assert len(sim_split.state.contacts) == 2

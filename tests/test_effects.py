@@ -96,3 +96,11 @@ def test_time_dependent_point_load_spins_a_block_at_first_order():
     rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     np.testing.assert_allclose(rates, 1.0, atol=0.1)
     assert errors[-1] / exact < 0.01
+
+
+def test_progress_bar_reports_on_stderr(capsys):
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(0, 0, 1, 1), ROCK)
+    dda.Simulation(scene, dt=1e-2).run(duration=0.5, progress=True)
+    err = capsys.readouterr().err
+    assert "100.0%" in err and "t =" in err

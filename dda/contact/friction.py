@@ -114,7 +114,7 @@ class CoulombSingle(FrictionLaw):
     >>> trial = law.return_map(law.initial_state(2), np.array([1e-3, -1e-5]),
     ...                        np.array([-100.0, -100.0]), np.array([1e6, 1e6]), np.ones(2))
     >>> trial.t_s.round(6).tolist(), trial.slipping.tolist()
-    [100.0, -10.0], [True, False]
+    ([100.0, -10.0], [True, False])
     """
 
     def __init__(self, phi: float, cohesion: float = 0.0):
