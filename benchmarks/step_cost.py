@@ -1,4 +1,4 @@
-"""Time per step of the legacy solver on a 2-block scene and a 100-block wall.
+"""Time per step of both solvers on a 2-block scene and a 100-block wall.
 
 Run:  python benchmarks/step_cost.py [--steps N]
 Prints wall time per step (median of the steps after the first 20), and where it goes.
@@ -51,8 +51,8 @@ def wall(rows=10, cols=10):
     return scene
 
 
-def measure(scene, steps, dt=1e-3):
-    sim = dda.Simulation(scene, dt=dt)
+def measure(scene, steps, solver, dt=1e-3):
+    sim = dda.Simulation(scene, dt=dt, solver=solver)
     t0 = time.perf_counter()
     result = sim.run(duration=steps * dt, progress=False)
     total = time.perf_counter() - t0
@@ -65,19 +65,21 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=500)
     ap.add_argument("--profile", action="store_true", help="print the top functions by time")
     args = ap.parse_args(argv)
-    for name, build in (("2 blocks (1 shaken)", two_blocks), ("100-block wall", wall)):
-        scene = build()
-        sim, result, total, median = measure(scene, args.steps)
-        contacts = int(np.median(result.stats["contacts"]))
-        print(f"{name:22s} {1e3 * median:7.3f} ms/step  ({1 / median:7.0f} steps/s), "
-              f"{contacts} contacts, {args.steps} steps in {total:.2f} s; "
-              f"{result.stats.summary()}")
-        if args.profile:
-            prof = cProfile.Profile()
-            prof.enable()
-            sim.run(duration=100 * sim.dt, progress=False)
-            prof.disable()
-            pstats.Stats(prof).sort_stats("tottime").print_stats(12)
+    cases = (("2 blocks (1 shaken)", two_blocks), ("100-block wall", wall))
+    for label, build in cases:
+        for make_solver in (dda.solvers.LegacyPullBack, dda.solvers.NewtonRaphson):
+            sim, result, total, median = measure(build(), args.steps, make_solver())
+            contacts = int(np.median(result.stats["contacts"]))
+            name = f"{label}, {sim.solver.name}"
+            print(f"{name:30s} {1e3 * median:7.3f} ms/step  ({1 / median:6.0f} steps/s), "
+                  f"{contacts} contacts, {args.steps} steps in {total:.2f} s; "
+                  f"{result.stats.summary()}")
+            if args.profile:
+                prof = cProfile.Profile()
+                prof.enable()
+                sim.run(duration=100 * sim.dt, progress=False)
+                prof.disable()
+                pstats.Stats(prof).sort_stats("tottime").print_stats(12)
 
 
 if __name__ == "__main__":
