@@ -8,6 +8,7 @@ import numpy as np
 
 from dda import geometry
 from dda._checks import finite_number, finite_vector
+from dda.contact.detection import find_overlaps
 from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
 from dda.materials import LinearElastic
@@ -318,8 +319,6 @@ class Scene:
                 raise ValueError(
                     "the scene has no default joint: call scene.set_joint(JointMaterial(...))"
                 )
-        from dda.contact.detection import find_overlaps
-
         verts, offsets = self.vertex_arrays()
         bad = find_overlaps(verts, offsets)
         if bad:

@@ -18,6 +18,7 @@ from dda._checks import finite_number
 from dda.contact.contacts import OPEN, ContactSet, carry_over
 from dda.contact.detection import VertexTopology, narrow_phase
 from dda.contact.element import ContactElement, LawGroups
+from dda.contact.kinematics import contact_geometry
 from dda.result import Frame, Result
 from dda.scene import Scene
 from dda.solvers.base import NonlinearSolver, StepProblem
@@ -476,8 +477,6 @@ class Simulation:
         c = st.contacts
         closed = c.state != OPEN
         if len(c):
-            from dda.contact.kinematics import contact_geometry
-
             g = contact_geometry(st.x, c.vertex, c.edge, self.topo.nxt)
             point, normal = g.p1, g.normal
         else:
@@ -499,8 +498,6 @@ class Simulation:
         closed = np.flatnonzero(c.state != OPEN)
         if len(closed) == 0:
             return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2))
-        from dda.contact.kinematics import contact_geometry
-
         g = contact_geometry(self.state.x, c.vertex[closed], c.edge[closed], self.topo.nxt)
         bj, bk = c.bj[closed], c.bk[closed]
         t_n, t_s = c.t_n[closed], c.t_s[closed]

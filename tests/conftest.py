@@ -61,3 +61,22 @@ def wedge_scene(penalty=1e7, law=None):
     scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
                                   friction=CoulombSingle(phi=45)), between=(floor, wedge))
     return scene, wedge, top
+
+
+def capture_step_problem(sim, dt):
+    """Run ``sim`` one more step and return that step's StepProblem (as the solver saw it)."""
+    from dda.solvers import newton
+
+    captured = {}
+    original = newton.NewtonRaphson.solve_step
+
+    def spy(self, problem):
+        captured["problem"] = problem
+        return original(self, problem)
+
+    newton.NewtonRaphson.solve_step = spy
+    try:
+        sim.run(dt)
+    finally:
+        newton.NewtonRaphson.solve_step = original
+    return captured["problem"]

@@ -6,8 +6,7 @@ import pytest
 import dda
 import dda.contact.element as element_module
 from dda.contact import CoulombSingle, JointMaterial, StaticDynamicTransition
-from dda.solvers import newton
-from tests.conftest import box, wedge_scene
+from tests.conftest import box, capture_step_problem, wedge_scene
 
 LAWS = {
     "coulomb": lambda: CoulombSingle(phi=20.0),
@@ -19,19 +18,7 @@ def capture_problem(scene, duration, dt=1e-3):
     """Run a scene with Newton-Raphson, then return the StepProblem of the next step."""
     sim = dda.Simulation(scene, dt=dt, solver=dda.solvers.NewtonRaphson())
     sim.run(duration)
-    captured = {}
-    original = newton.NewtonRaphson.solve_step
-
-    def spy(self, problem):
-        captured["problem"] = problem
-        return original(self, problem)
-
-    newton.NewtonRaphson.solve_step = spy
-    try:
-        sim.run(dt)
-    finally:
-        newton.NewtonRaphson.solve_step = original
-    return captured["problem"]
+    return capture_step_problem(sim, dt)
 
 
 def sliding_problem(law):

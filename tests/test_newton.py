@@ -4,8 +4,7 @@ import numpy as np
 import pytest
 
 import dda
-from dda.solvers import newton
-from tests.conftest import wedge_scene
+from tests.conftest import capture_step_problem, wedge_scene
 
 
 def convergence_order(norms, floor):
@@ -21,19 +20,7 @@ def wedge_step():
     scene, _, _ = wedge_scene(penalty=1e7)
     sim = dda.Simulation(scene, dt=1e-3, solver=dda.solvers.NewtonRaphson())
     sim.run(0.05)
-    captured = {}
-    original = newton.NewtonRaphson.solve_step
-
-    def spy(self, problem):
-        captured["problem"] = problem
-        return original(self, problem)
-
-    newton.NewtonRaphson.solve_step = spy
-    try:
-        sim.run(1e-3)
-    finally:
-        newton.NewtonRaphson.solve_step = original
-    problem = captured["problem"]
+    problem = capture_step_problem(sim, 1e-3)
     return problem, dda.solvers.NewtonRaphson(tol=1e-14).solve_step(problem)
 
 

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dda.contact.kinematics import contact_geometry
 from dda.geometry import next_vertex_index
 
 __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts"]
@@ -187,16 +188,9 @@ def narrow_phase(
         return empty
     vertex, edge = _expand_to_edges(vertex, kblock, topo.offsets)
 
-    p1 = x[vertex]
-    p2 = x[topo.nxt[edge]]
-    p3 = x[edge]
-    d = p3 - p2
-    length = np.hypot(d[:, 0], d[:, 1])
-    tau = d / length[:, None]
-    normal = np.stack([-tau[:, 1], tau[:, 0]], axis=1)
-    rel = p1 - p2
-    gap = np.einsum("ij,ij->i", rel, normal)
-    xi = np.einsum("ij,ij->i", rel, tau) / length
+    frame = contact_geometry(x, vertex, edge, topo.nxt)
+    p1, p2, p3 = frame.p1, frame.p2, frame.p3
+    normal, gap, xi = frame.normal, frame.gap, frame.xi
     on_edge = (xi >= -_XI_TOL) & (xi <= 1.0 + _XI_TOL)
     # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
     end = np.where((xi < 0.5)[:, None], p2, p3)
