@@ -430,7 +430,10 @@ class Simulation:
         widened = 0
         start = _time.perf_counter()
         while True:
-            dt = min(self._dt_now, t_end - self.state.time)
+            remaining = t_end - self.state.time
+            dt = min(self._dt_now, remaining)
+            if remaining - dt < 1e-6 * dt:
+                dt = remaining  # no sliver of a step left over at the end
             snaps = self._snapshots()
             new, sol = self._try_step(dt)
             if new is not None:

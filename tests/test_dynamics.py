@@ -226,3 +226,13 @@ def test_soft_penalty_keeps_a_deep_contact(rock, solver):
     sink = weight / (2 * pn)
     assert sink > 2e-3
     assert -result.displacement(top)[-1, 1] == pytest.approx(sink, rel=0.01)
+
+
+def test_run_ends_exactly_on_the_duration_without_a_sliver_step():
+    scene = dda.Scene(gravity=G)
+    scene.add_block(box(0, 0, 1, 1), LinearElastic(young=1e9, poisson=0.2, density=1e3))
+    sim = dda.Simulation(scene, dt=0.1)
+    result = sim.run(duration=0.3)  # 0.1 + 0.1 + 0.1 is 0.30000000000000004 in floats
+    result = sim.run(duration=0.7)
+    assert result.time[-1] == pytest.approx(1.0, abs=1e-12)
+    assert result.stats["dt"].min() > 0.09
