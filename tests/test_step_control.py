@@ -1,0 +1,80 @@
+"""Trial / commit / revert: failed steps leave no trace and are retried with a smaller dt."""
+
+import numpy as np
+import pytest
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.materials import LinearElastic
+from dda.solvers import NewtonRaphson
+from tests.conftest import box
+
+ROCK = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
+
+
+class FailsAboveDt(NewtonRaphson):
+    """Newton-Raphson that refuses any step longer than ``limit`` (a step that diverges)."""
+
+    def __init__(self, limit):
+        super().__init__()
+        self.limit = limit
+        self.refused = 0
+
+    def solve_step(self, problem):
+        if problem.dt > self.limit * (1 + 1e-12):
+            self.refused += 1
+            return dda.solvers.StepSolution(None, None, False, reason="too long a step")
+        return super().solve_step(problem)
+
+
+def shaken_block_scene():
+    scene = dda.Scene(gravity=9.81)
+    table = scene.add_block(box(0, 0, 2, 0.2), ROCK, name="table")
+    top = scene.add_block(box(0.9, 0.2, 0.2, 0.2), ROCK, name="top")
+    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                                  friction=CoulombSingle(phi=20)))
+    scene.shake(table, acceleration=lambda t: (6.0 * np.sin(2 * np.pi * 2 * t), 0.0))
+    return scene, table, top
+
+
+def test_failed_steps_are_reverted_and_retried_with_half_the_step():
+    scene, table, top = shaken_block_scene()
+    reference = dda.Simulation(scene, dt=2.5e-4, solver=NewtonRaphson()).run(0.2)
+    solver = FailsAboveDt(limit=2.5e-4)
+    result = dda.Simulation(scene, dt=1e-3, solver=solver).run(0.2)
+    assert solver.refused > 0
+    cuts = result.stats.cuts
+    assert cuts and all(reason == "too long a step" for _, _, reason in cuts)
+    assert {dt for _, dt, _ in cuts} <= {1e-3, 5e-4}
+    # dt grows back after quiet steps, so cuts happen more than once, and never below 2.5e-4
+    assert result.stats["dt"].min() == pytest.approx(2.5e-4)
+    assert result.stats["dt"].max() == pytest.approx(2.5e-4)
+    # a refused try leaves nothing behind: the run equals one made at 2.5e-4 from the start
+    # (the shaking history is integrated again from the committed time)
+    np.testing.assert_allclose(result.displacement(top)[-1], reference.displacement(top)[-1],
+                               rtol=0, atol=1e-12)
+    np.testing.assert_allclose(result.displacement(table)[-1],
+                               reference.displacement(table)[-1], rtol=0, atol=1e-15)
+
+
+def test_a_run_that_cannot_go_on_says_when_and_why_and_keeps_its_steps(tmp_path):
+    scene, table, top = shaken_block_scene()
+
+    class GivesUpLater(NewtonRaphson):
+        def solve_step(self, problem):
+            if problem.element.contacts is not None and self.calls >= 50:
+                return dda.solvers.StepSolution(None, None, False, reason="a wall")
+            self.calls += 1
+            return super().solve_step(problem)
+
+    solver = GivesUpLater()
+    solver.calls = 0
+    writer = dda.io.VTUWriter(tmp_path / "case")
+    sim = dda.Simulation(scene, dt=1e-3, solver=solver)
+    with pytest.raises(dda.SimulationError, match=r"cannot go on at t = 0.05 s: a wall") as info:
+        sim.run(0.2, output=writer)
+    partial = info.value.result
+    assert len(partial.time) == 51  # the start and the 50 steps done
+    assert partial.time[-1] == pytest.approx(0.05)
+    assert writer.pvd_path.exists() and len(writer.files) == 51
+    assert sim.state.time == pytest.approx(0.05)  # the committed state is the last good one
