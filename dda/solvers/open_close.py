@@ -15,6 +15,17 @@ Two flavours:
   sliding is not locked at once.
 - ``explicit=False`` (the start of the fully implicit method): every closed contact gets the
   friction check in every pass.
+
+Three rules keep the iteration honest (each was needed; tests/test_dynamics.py shows why):
+- a sliding contact whose trial shear force turns against the friction load of the pass
+  sticks (Shi's rule; without it friction does positive work and a block that hits a stop
+  is thrown back);
+- the pass only counts as settled when every sliding contact's lagged normal force agrees with
+  the pass's own within ``NORMAL_FORCE_RTOL`` (otherwise a one-pass penetration spike sets the
+  friction, and a sliding block decelerates at several times mu g);
+- when a pass brings back a set of states already tried, only the most violated contact is
+  switched (an active-set step), which ends the two-pass cycles of a block bouncing off a
+  stiff contact.
 """
 
 from __future__ import annotations
