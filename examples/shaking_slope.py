@@ -37,12 +37,16 @@ STOP = 0.105  # slide down the joint at which the stopper holds the upper block 
 
 def table_acceleration(peak_gal: float = 670.0, freq: float = 2.0, levels: int = 6,
                        hold: float = 1.0):
-    """A 2 Hz sine whose amplitude rises in ``levels`` equal steps, one every ``hold`` seconds,
-    to ``peak_gal`` and then stays there."""
+    """A 2 Hz wave whose amplitude rises in ``levels`` equal steps, one every ``hold`` seconds,
+    to ``peak_gal`` and then stays there.
+
+    A cosine, and the amplitude changes at whole periods: the table, which starts from rest,
+    then has zero mean velocity and shakes about a fixed place instead of drifting away (a sine
+    acceleration from rest drifts at A / omega)."""
 
     def accel(t):
         level = min(int(t / hold) + 1, levels) / levels
-        return (0.01 * peak_gal * level * np.sin(2 * np.pi * freq * t), 0.0)
+        return (0.01 * peak_gal * level * np.cos(2 * np.pi * freq * t), 0.0)
 
     return accel
 
