@@ -80,3 +80,15 @@ def capture_step_problem(sim, dt):
     finally:
         newton.NewtonRaphson.solve_step = original
     return captured["problem"]
+
+
+def shaken_block_scene(phi, amplitude, freq=2.0):
+    """A 0.2 m block on a 2 m table shaken by ``amplitude sin(2 pi freq t)`` (m/s^2)."""
+    rock = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
+    scene = dda.Scene(gravity=9.81)
+    table = scene.add_block(box(0, 0, 2, 0.2), rock, name="table")
+    top = scene.add_block(box(0.9, 0.2, 0.2, 0.2), rock, name="top")
+    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                                  friction=CoulombSingle(phi=phi)))
+    scene.shake(table, acceleration=lambda t: (amplitude * np.sin(2 * np.pi * freq * t), 0.0))
+    return scene, table, top

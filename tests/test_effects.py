@@ -4,10 +4,9 @@ import numpy as np
 import pytest
 
 import dda
-from dda.contact import CoulombSingle, JointMaterial
 from dda.effects import AccelerationHistory
 from dda.materials import LinearElastic
-from tests.conftest import box
+from tests.conftest import box, shaken_block_scene
 
 ROCK = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
 
@@ -33,13 +32,8 @@ def test_recorded_shake_is_exact_for_piecewise_linear():
 
 
 def test_shaken_block_follows_its_history_and_carries_a_stuck_block():
-    scene = dda.Scene(gravity=9.81)
-    table = scene.add_block(box(0, 0, 2, 0.2), ROCK, name="table")
-    top = scene.add_block(box(0.9, 0.2, 0.2, 0.2), ROCK, name="top")
-    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
-                                  friction=CoulombSingle(phi=45)))
     amp, f = 1.0, 2.0  # 0.1 g: far below tan(45) g, so the top block sticks
-    scene.shake(table, acceleration=lambda t: (amp * np.sin(2 * np.pi * f * t), 0.0))
+    scene, table, top = shaken_block_scene(phi=45, amplitude=amp, freq=f)
     result = dda.Simulation(scene, dt=1e-3).run(duration=1.0)
     w = 2 * np.pi * f
     t = result.time

@@ -4,10 +4,9 @@ import numpy as np
 import pytest
 
 import dda
-from dda.contact import CoulombSingle, JointMaterial
 from dda.materials import LinearElastic
 from dda.solvers import NewtonRaphson
-from tests.conftest import box
+from tests.conftest import shaken_block_scene
 
 ROCK = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
 
@@ -27,18 +26,8 @@ class FailsAboveDt(NewtonRaphson):
         return super().solve_step(problem)
 
 
-def shaken_block_scene():
-    scene = dda.Scene(gravity=9.81)
-    table = scene.add_block(box(0, 0, 2, 0.2), ROCK, name="table")
-    top = scene.add_block(box(0.9, 0.2, 0.2, 0.2), ROCK, name="top")
-    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
-                                  friction=CoulombSingle(phi=20)))
-    scene.shake(table, acceleration=lambda t: (6.0 * np.sin(2 * np.pi * 2 * t), 0.0))
-    return scene, table, top
-
-
 def test_failed_steps_are_reverted_and_retried_with_half_the_step():
-    scene, table, top = shaken_block_scene()
+    scene, table, top = shaken_block_scene(phi=20, amplitude=6.0)
     reference = dda.Simulation(scene, dt=2.5e-4, solver=NewtonRaphson()).run(0.2)
     solver = FailsAboveDt(limit=2.5e-4)
     result = dda.Simulation(scene, dt=1e-3, solver=solver).run(0.2)
@@ -58,7 +47,7 @@ def test_failed_steps_are_reverted_and_retried_with_half_the_step():
 
 
 def test_a_run_that_cannot_go_on_says_when_and_why_and_keeps_its_steps(tmp_path):
-    scene, table, top = shaken_block_scene()
+    scene, table, top = shaken_block_scene(phi=20, amplitude=6.0)
 
     class GivesUpLater(NewtonRaphson):
         def solve_step(self, problem):
