@@ -1,5 +1,6 @@
 """Contacts: detection, kinematics, the contact element, joints and friction laws."""
 
+from dda.contact.barton import BartonBandis
 from dda.contact.element import ContactElement
 from dda.contact.friction import (
     CoulombSingle,
@@ -10,6 +11,7 @@ from dda.contact.friction import (
 from dda.contact.joint import JointMaterial
 
 __all__ = [
+    "BartonBandis",
     "ContactElement",
     "CoulombSingle",
     "FrictionLaw",
