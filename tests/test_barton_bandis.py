@@ -7,8 +7,14 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+import dda
 from dda.contact import BartonBandis
 from dda.contact.barton import MOBILIZATION_JRC, MOBILIZATION_SLIP
+from dda.contact.contacts import SLIP
+from dda.studies.cases import shear_box
+from tests.conftest import capture_step_problem
+from tests.test_contact_element import resting_problem, sliding_problem, tangent_mismatch
+from tests.test_newton import convergence_order
 
 LENGTH = 0.05  # tributary length of the unit tests, m
 PEAK_SLIP = 1e-3
@@ -238,3 +244,67 @@ def test_tangent_matches_finite_differences(case):
     assert abs(dts_dgn[0] - fd_n) < 1e-6 * scale, (dts_dgn[0], fd_n)
     if not case.startswith("stick"):  # the normal-shear coupling is there in slip
         assert abs(dts_dgn[0]) > 1e-3 * pn[0]
+
+
+# --- inside the contact element and Newton-Raphson ----------------------------------------------
+
+SCENE_LAWS = {
+    "peak": lambda: BartonBandis(jrc=2, jcs=1e5, phi_r=20, mobilized=False),
+    "mobilized": lambda: BartonBandis(jrc=2, jcs=1e5, phi_r=20, slip_at_peak=1e-3),
+    "size-rule": lambda: BartonBandis(jrc=5, jcs=1e6, phi_r=20),
+}
+
+
+@pytest.mark.parametrize("law_name", sorted(SCENE_LAWS))
+@pytest.mark.parametrize("case, expect_slip", [(sliding_problem, True),
+                                               (resting_problem, False)],
+                         ids=["slip", "stick"])
+def test_contact_tangent_matches_finite_differences(case, expect_slip, law_name):
+    """The element's tangent with this law against FD of its residual (geometric terms in)."""
+    problem = case(SCENE_LAWS[law_name]())
+    resp, mismatch = tangent_mismatch(problem, np.random.default_rng(1))
+    on_law = resp.closed & (problem.element.contacts.history["slip"] > 0)  # not the wedge's
+    if expect_slip:
+        assert resp.slipping[on_law].sum() >= 2
+    else:
+        assert (resp.closed & ~resp.slipping).sum() >= 2
+    assert mismatch < 1e-6
+
+
+@pytest.fixture(scope="module")
+def softening_shear_step():
+    """A direct-shear step on the softening branch (slip about 2 slip_at_peak), solved."""
+    law = BartonBandis(jrc=10, jcs=50e6, phi_r=30, slip_at_peak=0.5e-3)
+    n = 50
+    scene, _, _ = shear_box(4e-3, friction=law, consolidation=1.0 / n)
+    sim = dda.Simulation(scene, dt=1.0 / n, analysis="static")
+    sim.run(0.6)
+    problem = capture_step_problem(sim, 1.0 / n)
+    return problem, dda.solvers.NewtonRaphson(tol=1e-14).solve_step(problem)
+
+
+@pytest.mark.parametrize("shift", [1e-4, 3e-4, 1e-3])
+def test_newton_converges_quadratically_through_the_law(softening_shear_step, shift):
+    """g_n is linear in the unknowns here, so the law alone makes the step nonlinear; a
+    1 mm shift crosses the table entry at 4 slips at peak."""
+    problem, reference = softening_shear_step
+    assert (reference.contacts.state == SLIP).all()
+    d = reference.d.copy()
+    d[problem.free, 0] += shift
+    sol = dda.solvers.NewtonRaphson(tol=1e-14).iterate(problem, d)
+    assert sol.converged
+    np.testing.assert_allclose(sol.d, reference.d, rtol=0, atol=1e-12)
+    assert convergence_order(sol.residual_norms, floor=1e-6) >= 1.8
+
+
+@pytest.mark.parametrize("rotation", [0.003, 0.01])
+def test_newton_converges_quadratically_on_a_moving_edge(rotation):
+    """The block slipping down the free wedge: geometric terms and the law together."""
+    problem = sliding_problem(SCENE_LAWS["mobilized"]())
+    reference = dda.solvers.NewtonRaphson(tol=1e-14).solve_step(problem)
+    d = reference.d.copy()
+    d[problem.free, 2] += rotation * np.array([1.0, -1.0])
+    sol = dda.solvers.NewtonRaphson(tol=1e-14).iterate(problem, d)
+    assert sol.converged
+    np.testing.assert_allclose(sol.d, reference.d, rtol=0, atol=1e-12)
+    assert convergence_order(sol.residual_norms, floor=1e-7) >= 1.8
