@@ -8,7 +8,9 @@ import dda
 from dda.contact import CoulombSingle, JointMaterial
 from dda.materials import LinearElastic
 
-__all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH"]
+__all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip"]
+
+G = 9.81
 
 #: contact length of the shear-box cases (the upper block's width), m
 SHEAR_BOX_LENGTH = 0.1
@@ -61,3 +63,35 @@ def shear_stress(result, lower, upper) -> np.ndarray:
     """Shear stress on the joint (Pa), positive when it resists the upper block moving right:
     the pair's shear force over the contact length."""
     return -result.joint_force(lower, upper)[:, 1] / SHEAR_BOX_LENGTH
+
+
+def moving_base(penalty: float = 2e9, phi: float = 36.4, amplitude: float = G,
+                freq: float = 2.0, shear_ratio: float = 1.0):
+    """A block on a base that shakes horizontally: H 3(2) and A 4(1).
+
+    Two elastic blocks (E 14.9 GPa, nu 0.2, unit weight 21.56 kN/m^3): a base 1 m x 0.2 m and
+    a 0.2 m square block centred on it, joint friction ``phi`` degrees. The base follows the
+    table acceleration ``amplitude sin(2 pi freq t)`` (m/s^2) from rest; the default is the
+    1 g, 2 Hz shaking of METHOD.md section 10. ``penalty`` is the normal penalty (N/m), the
+    shear penalty is ``shear_ratio`` times it.
+
+    Returns
+    -------
+    scene, base, block
+    """
+    rock = LinearElastic(young=14.9e9, poisson=0.2, density=21.56e3 / G)
+    scene = dda.Scene(gravity=G)
+    base = scene.add_block([(0, 0), (1, 0), (1, 0.2), (0, 0.2)], rock, fixed=True, name="base")
+    block = scene.add_block([(0.4, 0.2), (0.6, 0.2), (0.6, 0.4), (0.4, 0.4)], rock,
+                            name="block")
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=shear_ratio * penalty,
+                                  friction=CoulombSingle(phi=phi)))
+    omega = 2 * np.pi * freq
+    scene.shake(base, acceleration=lambda t: (amplitude * np.sin(omega * t), 0.0))
+    return scene, base, block
+
+
+def relative_slip(result, base, block, direction=(1.0, 0.0)) -> np.ndarray:
+    """Displacement of ``block`` relative to ``base`` along ``direction`` (m), per record."""
+    rel = result.displacement(block) - result.displacement(base)
+    return rel @ np.asarray(direction, dtype=float)
