@@ -27,28 +27,19 @@ from pathlib import Path
 import numpy as np
 
 import dda
-from dda.contact import CoulombSingle, JointMaterial
-from dda.materials import LinearElastic
+from dda.contact import CoulombSingle
+from dda.studies.cases import SLOPE_DIP, SLOPE_STOP, rock_slope, slide_down_dip, stepped_table
 
 G = 9.81
-DIP = np.radians(15.0)
-STOP = 0.105  # slide down the joint at which the stopper holds the upper block (m)
+DIP = np.radians(SLOPE_DIP)
+STOP = SLOPE_STOP  # slide down the joint at which the stopper holds the upper block (m)
 
 
 def table_acceleration(peak_gal: float = 670.0, freq: float = 2.0, levels: int = 6,
                        hold: float = 1.0):
-    """A 2 Hz wave whose amplitude rises in ``levels`` equal steps, one every ``hold`` seconds,
-    to ``peak_gal`` and then stays there.
-
-    A cosine, and the amplitude changes at whole periods: the table, which starts from rest,
-    then has zero mean velocity and shakes about a fixed place instead of drifting away (a sine
-    acceleration from rest drifts at A / omega)."""
-
-    def accel(t):
-        level = min(int(t / hold) + 1, levels) / levels
-        return (0.01 * peak_gal * level * np.cos(2 * np.pi * freq * t), 0.0)
-
-    return accel
+    """The table: a 2 Hz wave raised in ``levels`` steps, one every ``hold`` seconds, to
+    ``peak_gal`` (:func:`dda.studies.cases.stepped_table`)."""
+    return stepped_table(peak_gal, freq, levels, hold)
 
 
 def slide_threshold(phi: float) -> float:
@@ -58,37 +49,15 @@ def slide_threshold(phi: float) -> float:
 
 
 def build_scene(phi: float = 31.6, peak_gal: float = 670.0):
-    """The scene: a lower block with a 15 degree face (on the table) and an upper block on it."""
-    rock = LinearElastic(young=7.0e9, poisson=0.33, density=22.0e3 / G)
-    scene = dda.Scene(gravity=G)
-    width, toe = 0.38, 0.05
-    rise = width * np.tan(DIP)
-
-    def face(x):
-        return toe + rise - x * np.tan(DIP)
-
-    x1, x2, height = 0.06, 0.30, 0.13
-    # the stopper: a lip at the toe that the upper block meets after STOP of slide
-    x_stop = x2 + STOP * np.cos(DIP)
-    lip = face(x_stop) + 0.04
-    lower = scene.add_block(
-        [(0, 0), (x_stop + 0.03, 0), (x_stop + 0.03, lip), (x_stop, lip),
-         (x_stop, face(x_stop)), (0, toe + rise)],
-        rock, fixed=True, name="lower",
-    )
-    upper = scene.add_block([(x1, face(x1)), (x2, face(x2)), (x2, face(x1) + height),
-                             (x1, face(x1) + height)], rock, name="upper")
-    scene.set_joint(JointMaterial(normal_penalty=10e9, shear_penalty=10e9,
-                                  friction=CoulombSingle(phi=phi)))
-    scene.shake(lower, acceleration=table_acceleration(peak_gal))
-    return scene, lower, upper
+    """The scene: a lower block with a 15 degree face (on the table) and an upper block on it
+    (:func:`dda.studies.cases.rock_slope`), one friction angle, kn = ks = 10 GN/m."""
+    return rock_slope(CoulombSingle(phi=phi), table_acceleration(peak_gal),
+                      shear_penalty=10e9)
 
 
 def slide_along_joint(result, lower, upper) -> np.ndarray:
     """Displacement of the upper block relative to the lower one, down the joint (m)."""
-    rel = result.displacement(upper) - result.displacement(lower)
-    down_dip = np.array([np.cos(DIP), -np.sin(DIP)])
-    return rel @ down_dip
+    return slide_down_dip(result, lower, upper)
 
 
 def slide_start(result, slide, creep: float = 1e-5) -> float:

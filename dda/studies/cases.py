@@ -8,7 +8,8 @@ import dda
 from dda.contact import CoulombSingle, JointMaterial
 from dda.materials import LinearElastic
 
-__all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip"]
+__all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip",
+           "stepped_table", "rock_slope", "slide_down_dip", "SLOPE_DIP", "SLOPE_STOP"]
 
 G = 9.81
 
@@ -95,3 +96,77 @@ def relative_slip(result, base, block, direction=(1.0, 0.0)) -> np.ndarray:
     """Displacement of ``block`` relative to ``base`` along ``direction`` (m), per record."""
     rel = result.displacement(block) - result.displacement(base)
     return rel @ np.asarray(direction, dtype=float)
+
+
+#: dip of the rock-slope joint (degrees) and the slide at which its stopper holds (m)
+SLOPE_DIP = 15.0
+SLOPE_STOP = 0.105
+
+
+def stepped_table(peak_gal: float = 670.0, freq: float = 2.0, levels: int = 8,
+                  hold: float = 2.0):
+    """Horizontal table acceleration ``t -> (a_x, 0)`` (m/s^2): a sinusoid of ``freq`` Hz whose
+    amplitude rises in ``levels`` equal steps, one every ``hold`` seconds, to ``peak_gal``.
+
+    The wave is a cosine, and the amplitude changes at whole periods. The table starts from
+    rest, so it has zero mean velocity and shakes about a fixed place; a sine would drift at
+    A / omega. ``hold`` must be a whole number of periods; the acceleration jumps at
+    ``k * hold``.
+    """
+    periods = hold * freq
+    if abs(periods - round(periods)) > 1e-9 or periods < 1:
+        raise ValueError(f"stepped_table: hold ({hold} s) must be a whole number of periods "
+                         f"of {freq} Hz")
+
+    def accel(t):
+        level = min(int(t / hold + 1e-12) + 1, levels) / levels
+        return (0.01 * peak_gal * level * np.cos(2 * np.pi * freq * t), 0.0)
+
+    accel.breakpoints = [k * hold for k in range(1, levels)]
+    return accel
+
+
+def rock_slope(friction, table=None, normal_penalty: float = 10e9,
+               shear_penalty: float = 10e6, height: float = 0.13):
+    """The two-block rock slope of the shaking-table test of S 3(2) (Adachi et al. 2017).
+
+    A lower block with a face dipping 15 degrees, bolted to the table, and an upper block
+    (240 mm along x, 130 mm high) on the face. Ryukyu limestone: E 7.0 GPa, nu 0.33,
+    22.0 kN/m^3. The papers' kn 10 GN/m and ks 10 MN/m are the defaults. A lip at the toe of
+    the lower block (a non-convex block) stops the slide after ``SLOPE_STOP`` = 10.5 cm, as the
+    stopper of the test did. ``table`` is the table acceleration (default
+    :func:`stepped_table`); ``height`` the upper block's height (m).
+
+    Returns
+    -------
+    scene, lower, upper
+    """
+    rock = LinearElastic(young=7.0e9, poisson=0.33, density=22.0e3 / G)
+    scene = dda.Scene(gravity=G)
+    dip = np.radians(SLOPE_DIP)
+    width, toe = 0.38, 0.05
+    rise = width * np.tan(dip)
+
+    def face(x):
+        return toe + rise - x * np.tan(dip)
+
+    x1, x2 = 0.06, 0.30
+    x_stop = x2 + SLOPE_STOP * np.cos(dip)
+    lip = face(x_stop) + 0.04
+    lower = scene.add_block(
+        [(0, 0), (x_stop + 0.03, 0), (x_stop + 0.03, lip), (x_stop, lip),
+         (x_stop, face(x_stop)), (0, toe + rise)],
+        rock, fixed=True, name="lower",
+    )
+    upper = scene.add_block([(x1, face(x1)), (x2, face(x2)), (x2, face(x1) + height),
+                             (x1, face(x1) + height)], rock, name="upper")
+    scene.set_joint(JointMaterial(normal_penalty=normal_penalty, shear_penalty=shear_penalty,
+                                  friction=friction))
+    scene.shake(lower, acceleration=table if table is not None else stepped_table())
+    return scene, lower, upper
+
+
+def slide_down_dip(result, lower, upper) -> np.ndarray:
+    """Slide of the upper block down the rock-slope joint, relative to the lower block (m)."""
+    dip = np.radians(SLOPE_DIP)
+    return relative_slip(result, lower, upper, (np.cos(dip), -np.sin(dip)))

@@ -1,0 +1,70 @@
+"""The paper-case examples run as a user runs them and write what they promise."""
+
+import csv
+
+import numpy as np
+import pytest
+
+from tests.test_examples import load
+
+
+def picture_is_not_blank(path):
+    assert path.stat().st_size > 20_000
+    image = pytest.importorskip("matplotlib.image").imread(path)
+    assert image[..., :3].std() > 0.05
+
+
+def csv_rows(path):
+    with open(path) as f:
+        return list(csv.DictReader(f))
+
+
+def test_direct_shear_example(tmp_path, capsys):
+    runs = load("direct_shear").main(["--out", str(tmp_path)])
+    assert "overshoot" in capsys.readouterr().out
+    picture_is_not_blank(tmp_path / "direct_shear.png")
+    assert len(csv_rows(tmp_path / "direct_shear.csv")) == sum(len(r["tau"]) for r in runs)
+    assert len(list(tmp_path.glob("direct_shear_*.vtu"))) == 22  # 20 steps, start, consolidation
+    over = {(r["solver"], r["steps"]): r["overshoot"] for r in runs}
+    assert over["legacy", 20] > over["legacy", 50] > over["legacy", 200] > 0.01
+    assert max(abs(over["newton", n]) for n in (20, 50, 200)) < 0.005
+
+
+def test_simple_shear_example(tmp_path, capsys):
+    runs = load("simple_shear").main(["--out", str(tmp_path)])
+    assert "after the drop" in capsys.readouterr().out
+    picture_is_not_blank(tmp_path / "simple_shear.png")
+    assert (tmp_path / "simple_shear.pvd").exists()
+    newton = runs[0]
+    assert newton["peak"] == pytest.approx(577.35e3, rel=0.005)
+    assert newton["after_drop"] == pytest.approx(363.97e3, rel=0.005)
+
+
+def test_moving_base_example(tmp_path, capsys):
+    runs = load("moving_base").main(["--out", str(tmp_path), "--duration", "0.3"])
+    out = capsys.readouterr().out
+    assert "worst peak error" in out and "| legacy | 0.01 |" in out
+    picture_is_not_blank(tmp_path / "moving_base.png")
+    table = csv_rows(tmp_path / "moving_base_table.csv")
+    assert len(table) == 16
+    assert (tmp_path / "moving_base_table.md").read_text().count("\n") == 18
+    assert (tmp_path / "moving_base.pvd").exists()
+    for r in runs:
+        if r["solver"] == "newton":
+            assert abs(r["peak_error"]) < (0.05 if r["dt"] == 1e-3 else 0.10)
+
+
+def test_rock_slope_example(tmp_path, capsys):
+    runs = load("rock_slope").main(["--out", str(tmp_path), "--hold", "0.5"])
+    assert "start rigid" in capsys.readouterr().out
+    picture_is_not_blank(tmp_path / "rock_slope.png")
+    rows = csv_rows(tmp_path / "rock_slope.csv")
+    assert len(rows) == len(runs[0]["time"])
+    # every 20 recorded steps: one per 20 ms, more where dt was cut at the stopper
+    assert len(list(tmp_path.glob("rock_slope_*.vtu"))) >= 201
+    single, transition = runs
+    assert abs(single["start"] - single["rigid_start"]) < 0.05
+    assert abs(transition["start"] - transition["rigid_start"]) < 0.05
+    # the transition makes the block slide farther than one angle does
+    k = np.searchsorted(single["time"], 3.0)
+    assert transition["slide"][k] > 5 * single["slide"][k]
