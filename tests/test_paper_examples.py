@@ -70,3 +70,21 @@ def test_rock_slope_example(tmp_path, capsys):
         return run["slide"][np.searchsorted(run["time"], t)]
 
     assert at(transition, 3.0) > 5 * at(single, 3.0)
+
+
+def test_stacked_cubes_example(tmp_path, capsys):
+    runs = load("stacked_cubes").main(["--out", str(tmp_path), "--duration", "1",
+                                       "--cases", "3:300,3:700"])
+    out = capsys.readouterr().out
+    assert "outcomes agree with the test" in out
+    picture_is_not_blank(tmp_path / "stacked_cubes.png")
+    rows = csv_rows(tmp_path / "stacked_cubes.csv")
+    assert [(r["freq_Hz"], r["amplitude_gal"], r["test_outcome"]) for r in rows] == [
+        ("3.0", "300.0", "stable"), ("3.0", "700.0", "toppled")]
+    assert (tmp_path / "stacked_cubes.pvd").exists()
+    assert runs[0]["outcome"] == "stable"
+
+
+def test_stacked_cubes_example_refuses_unknown_cases(tmp_path):
+    with pytest.raises(SystemExit):
+        load("stacked_cubes").main(["--out", str(tmp_path), "--cases", "4:300"])

@@ -9,7 +9,8 @@ from dda.contact import CoulombSingle, JointMaterial
 from dda.materials import LinearElastic
 
 __all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip",
-           "stepped_table", "rock_slope", "slide_down_dip", "SLOPE_DIP", "SLOPE_STOP"]
+           "stepped_table", "rock_slope", "slide_down_dip", "SLOPE_DIP", "SLOPE_STOP",
+           "ramped_sine", "stacked_cubes", "CUBE"]
 
 G = 9.81
 
@@ -170,3 +171,55 @@ def slide_down_dip(result, lower, upper) -> np.ndarray:
     """Slide of the upper block down the rock-slope joint, relative to the lower block (m)."""
     dip = np.radians(SLOPE_DIP)
     return relative_slip(result, lower, upper, (np.cos(dip), -np.sin(dip)))
+
+
+#: edge of the stacked concrete cubes of A 3 (m)
+CUBE = 0.15
+
+
+def ramped_sine(freq: float, amplitude_gal: float, ramp: float = 0.5,
+                stop: float | None = None):
+    """Table acceleration ``t -> (a_x, 0)``: a sine of ``freq`` Hz and ``amplitude_gal``, its
+    amplitude raised over the first ``ramp`` seconds by a half-cosine (no jump at the start)
+    and, when ``stop`` is given, lowered the same way over the last ``ramp`` seconds before
+    ``stop``; the table is still after ``stop``.
+    """
+    amp = 0.01 * amplitude_gal
+    omega = 2 * np.pi * freq
+
+    def accel(t):
+        env = 0.5 * (1 - np.cos(np.pi * t / ramp)) if t < ramp else 1.0
+        if stop is not None:
+            if t >= stop:
+                return (0.0, 0.0)
+            if t > stop - ramp:
+                env *= 0.5 * (1 - np.cos(np.pi * (stop - t) / ramp))
+        return (amp * env * np.sin(omega * t), 0.0)
+
+    return accel
+
+
+def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: float = 36.4):
+    """Three 15 cm concrete cubes (7.4 kg each) stacked on a shaking table: A 3 and A 4(2).
+
+    Unit weight 21.56 kN/m^3 (7.4 kg / 0.15^3 m^3), E 14.9 GPa, nu 0.2, joint friction
+    ``phi`` degrees (A's single-block value), normal penalty ``penalty`` (A: 2e4 kN/m) and
+    shear penalty ``shear_ratio`` times it. The table is a fixed 1.2 m x 0.1 m block following
+    ``table`` (an acceleration history, see :func:`ramped_sine`).
+
+    Returns
+    -------
+    scene, table_block, cubes (bottom to top)
+    """
+    rock = LinearElastic(young=14.9e9, poisson=0.2, density=21.56e3 / G)
+    scene = dda.Scene(gravity=G)
+    base = scene.add_block([(-0.6, -0.1), (0.6, -0.1), (0.6, 0.0), (-0.6, 0.0)], rock,
+                           fixed=True, name="table")
+    h = CUBE / 2
+    cubes = [scene.add_block([(-h, k * CUBE), (h, k * CUBE), (h, (k + 1) * CUBE),
+                              (-h, (k + 1) * CUBE)], rock, name=f"cube{k + 1}")
+             for k in range(3)]
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=shear_ratio * penalty,
+                                  friction=CoulombSingle(phi=phi)))
+    scene.shake(base, acceleration=table)
+    return scene, base, cubes
