@@ -55,21 +55,28 @@ def test_moving_base_example(tmp_path, capsys):
 
 
 def test_rock_slope_example(tmp_path, capsys):
-    runs = load("rock_slope").main(["--out", str(tmp_path), "--hold", "0.5"])
+    runs = load("rock_slope").main(["--out", str(tmp_path), "--hold", "0.5",
+                                    "--joints", "single,face"])
     assert "start rigid" in capsys.readouterr().out
     picture_is_not_blank(tmp_path / "rock_slope.png")
     rows = csv_rows(tmp_path / "rock_slope.csv")
     assert len(rows) == len(runs[0]["time"])
     # every 20 recorded steps: one per 20 ms, more where dt was cut at the stopper
     assert len(list(tmp_path.glob("rock_slope_*.vtu"))) >= 201
-    single, transition = runs
+    single, face = runs
+    assert (single["joint"], face["joint"]) == ("single", "face")
     assert abs(single["start"] - single["rigid_start"]) < 0.05
-    assert abs(transition["start"] - transition["rigid_start"]) < 0.05
+    assert abs(face["start"] - face["rigid_start"]) < 0.05
     # the transition makes the block slide farther than one angle does
     def at(run, t):
         return run["slide"][np.searchsorted(run["time"], t)]
 
-    assert at(transition, 3.0) > 5 * at(single, 3.0)
+    assert at(face, 3.0) > 5 * at(single, 3.0)
+
+
+def test_rock_slope_example_names_unknown_joints(tmp_path):
+    with pytest.raises(SystemExit):
+        load("rock_slope").main(["--out", str(tmp_path), "--joints", "single,glue"])
 
 
 def test_stacked_cubes_example(tmp_path, capsys):

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda.contact.contacts import SLIP, STICK, ContactSet
+from dda.contact.faces import Faces, contact_faces
 from dda.contact.friction import FrictionLaw
 from dda.contact.kinematics import (
     ContactGeometry,
@@ -26,9 +27,18 @@ __all__ = ["ContactElement", "LawGroups"]
 
 @dataclass
 class LawGroups:
-    """Contacts grouped by the friction law they share: ``[(law, indices), ...]``."""
+    """Contacts grouped by the friction law they share: ``[(law, indices), ...]``.
+
+    ``faces`` says which contacts form one face; it is only needed (and only set, by
+    :class:`ContactElement`) when a law judges faces as a whole (``law.uses_faces``).
+    """
 
     groups: list[tuple[FrictionLaw, np.ndarray]]
+    faces: Faces | None = None
+
+    @property
+    def uses_faces(self) -> bool:
+        return any(law.uses_faces for law, _ in self.groups)
 
     @classmethod
     def build(cls, law_index: np.ndarray, laws: list[FrictionLaw]) -> LawGroups:
@@ -67,10 +77,13 @@ class LawGroups:
                 idx = idx[where[idx]]
             if len(idx) == 0:
                 continue
-            trial = law.return_map(
-                self._select(history, law, idx), delta_g_s[idx], t_n[idx],
-                shear_penalty[idx], length[idx],
-            )
+            args = (self._select(history, law, idx), delta_g_s[idx], t_n[idx],
+                    shear_penalty[idx], length[idx])
+            if law.uses_faces:
+                faces = self.faces.subset(idx) if self.faces is not None else None
+                trial = law.return_map(*args, faces=faces)
+            else:
+                trial = law.return_map(*args)
             t_s[idx] = trial.t_s
             slipping[idx] = trial.slipping
             for k, v in law.commit(trial).items():
@@ -132,6 +145,9 @@ class ContactElement:
         self.bk = contacts.bk
         self.normal_penalty = normal_penalty
         self.shear_penalty = shear_penalty
+        if laws.uses_faces:
+            faces = contact_faces(x, contacts.vertex, contacts.edge, nxt, prv)
+            laws = LawGroups(laws.groups, faces)
         self.laws = laws
         geom: ContactGeometry = contact_geometry(x, contacts.vertex, contacts.edge, nxt)
         self.geometry = geom

@@ -41,7 +41,13 @@ class FrictionLaw(ABC):
 
     Every law keeps at least the elastic shear displacement ``g_se`` (so ``t_s = p_s g_se``) and
     the accumulated slip ``slip``; a law adds its own fields in :meth:`history_fields`.
+
+    A law that judges a face-to-face contact as a whole sets ``uses_faces`` to True; its
+    :meth:`return_map` then also gets ``faces=`` (:class:`dda.contact.faces.Faces`: which of
+    its contacts form one face).
     """
+
+    uses_faces: bool = False
 
     def history_fields(self) -> dict[str, float]:
         """Names of the history fields and their value for a contact that has just closed."""
@@ -161,10 +167,27 @@ class StaticDynamicTransition(FrictionLaw):
     The history field ``sliding`` (1.0 or 0.0) records whether the contact was sliding at the
     end of the last committed step.
 
+    ``onset`` says what must exceed the static strength for sliding to start:
+
+    - ``"contact"`` (the papers' rule, the default): each vertex-edge contact on its own. The two
+      contacts at the ends of a face share its shear force about equally, but a rocking moment
+      loads one end more than the other, so the lightly pressed end yields first. Its force
+      drops to the dynamic strength, the other end takes the difference and yields in turn: the
+      face starts sliding before its total shear force reaches ``tan(phi_static)`` times its
+      total normal force (a progressive failure).
+    - ``"face"``: the contacts of one face (:mod:`dda.contact.faces`) start sliding together,
+      when the face's shear force exceeds its strength: ``|sum t_s| > sum |t_n| tan(phi)``
+      (``phi_static`` for the sticking contacts, ``phi_dynamic`` for the sliding ones, their
+      force capped at the dynamic strength). This is a rigid block's rule. Contacts that slide
+      are checked one by one with ``phi_dynamic`` as before; a corner contact is a face of its
+      own, so both rules agree on it.
+
     Parameters
     ----------
     phi_static, phi_dynamic : float
         Friction angles in degrees, 0 <= phi_dynamic <= phi_static < 90.
+    onset : {"contact", "face"}
+        What must yield for sliding to start (see above).
 
     Examples
     --------
@@ -177,7 +200,9 @@ class StaticDynamicTransition(FrictionLaw):
     (0.364, True)
     """
 
-    def __init__(self, phi_static: float, phi_dynamic: float):
+    ONSETS = ("contact", "face")
+
+    def __init__(self, phi_static: float, phi_dynamic: float, onset: str = "contact"):
         where = "StaticDynamicTransition"
         phi_s = finite_number("phi_static", phi_static, nonnegative=True, where=where)
         phi_d = finite_number("phi_dynamic", phi_dynamic, nonnegative=True, where=where)
@@ -186,24 +211,37 @@ class StaticDynamicTransition(FrictionLaw):
         if phi_d > phi_s:
             raise ValueError(
                 f"{where}: phi_dynamic ({phi_d}) must not exceed phi_static ({phi_s})")
+        if onset not in self.ONSETS:
+            raise ValueError(f"{where}: onset must be one of {self.ONSETS}, got {onset!r}")
         self.phi_static, self.phi_dynamic = phi_s, phi_d
+        self.onset = onset
         self.mu_static = float(np.tan(np.radians(phi_s)))
         self.mu_dynamic = float(np.tan(np.radians(phi_d)))
 
+    @property
+    def uses_faces(self) -> bool:
+        return self.onset == "face"
+
     def __repr__(self):
+        onset = "" if self.onset == "contact" else f", onset={self.onset!r}"
         return (f"StaticDynamicTransition(phi_static={self.phi_static}, "
-                f"phi_dynamic={self.phi_dynamic})")
+                f"phi_dynamic={self.phi_dynamic}{onset})")
 
     def history_fields(self) -> dict[str, float]:
         return {"g_se": 0.0, "slip": 0.0, "sliding": 0.0}
 
-    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces=None):
         t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
         pressure = np.maximum(-t_n, 0.0)
         sliding = committed["sliding"] > 0.5
-        check = pressure * np.where(sliding, self.mu_dynamic, self.mu_static)
-        slipping = np.abs(t_trial) > check
         dynamic = pressure * self.mu_dynamic
+        check = np.where(sliding, dynamic, pressure * self.mu_static)
+        if faces is None:
+            slipping = np.abs(t_trial) > check
+        else:
+            carried = np.where(sliding, np.clip(t_trial, -dynamic, dynamic), t_trial)
+            face_yields = np.abs(faces.total(carried)) > faces.total(check)
+            slipping = np.where(sliding, np.abs(t_trial) > dynamic, face_yields)
         t_s = np.where(slipping, dynamic * np.sign(t_trial), t_trial)
         state = {
             "g_se": t_s / shear_penalty,

@@ -45,7 +45,7 @@ class LegacyPullBack(NonlinearSolver):
         stick = state == STICK
         slip = state == SLIP
         new_history = laws.elastic_update(history, dgs, stick)
-        t_s_slip, _, slip_history = laws.return_map(history, dgs, t_n, ps, lc, where=slip)
+        t_s_slip, _, slip_history = laws.return_map(history, dgs, t_n, ps, lc, where=closed)
         for key, v in slip_history.items():
             new_history[key][slip] = v[slip]
         t_s = np.where(stick, ps * new_history["g_se"], 0.0) + np.where(slip, t_s_slip, 0.0)

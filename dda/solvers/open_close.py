@@ -84,7 +84,10 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
     seen = {state.tobytes()}
     for passes in range(1, problem.max_open_close + 1):
         slip = state == SLIP
-        t_slip, _, _ = laws.return_map(history, dgs_prev, t_n_lag, ps, lc, where=slip)
+        # evaluated on every closed contact (used on the sliding ones): a law that judges
+        # faces needs a face's sticking contacts too
+        t_slip, _, _ = laws.return_map(history, dgs_prev, t_n_lag, ps, lc, where=state != OPEN)
+        t_slip = np.where(slip, t_slip, 0.0)
         k, f = el.legacy_contributions(state, history["g_se"], t_slip)
         try:
             d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
