@@ -7,7 +7,8 @@ import dda
 from dda.contact import JointMaterial, StaticDynamicTransition
 from dda.contact.faces import Faces, contact_faces
 from dda.materials import LinearElastic
-from tests.conftest import box
+from tests.conftest import box, capture_step_problem, wedge_scene
+from tests.test_newton import convergence_order
 
 ROCK = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
 PUSH = 2.0  # table acceleration, m/s^2, held constant after a smooth ramp
@@ -135,3 +136,20 @@ def test_onset_is_checked():
         StaticDynamicTransition(40.0, 30.0, onset="block")
     assert "onset='face'" in repr(StaticDynamicTransition(40.0, 30.0, onset="face"))
     assert StaticDynamicTransition(40.0, 30.0).uses_faces is False
+
+
+def test_newton_converges_quadratically_with_face_onset():
+    """A block sliding down a free wedge: both contacts of its face slip, at the dynamic angle."""
+    law = StaticDynamicTransition(20.0, 15.0, onset="face")
+    scene, _, _ = wedge_scene(penalty=1e7, law=law)
+    sim = dda.Simulation(scene, dt=1e-3, solver=dda.solvers.NewtonRaphson())
+    sim.run(0.05)
+    problem = capture_step_problem(sim, 1e-3)
+    reference = dda.solvers.NewtonRaphson(tol=1e-14).solve_step(problem)
+    assert (reference.contacts.state == 2).sum() == 2  # the block's face; the wedge sticks
+    d = reference.d.copy()
+    d[problem.free, 2] += 0.01 * np.array([1.0, -1.0])
+    sol = dda.solvers.NewtonRaphson(tol=1e-14).iterate(problem, d)
+    assert sol.converged
+    np.testing.assert_allclose(sol.d, reference.d, rtol=0, atol=1e-12)
+    assert convergence_order(sol.residual_norms, floor=1e-7) >= 1.8
