@@ -470,6 +470,12 @@ class Simulation:
         )
 
     # ------------------------------------------------------------------ recording
+    def energy(self):
+        """The mechanical energy of the committed state (:func:`dda.energy.energy`)."""
+        from dda.energy import energy
+
+        return energy(self)
+
     def frame(self) -> Frame:
         """The committed state as a :class:`dda.result.Frame`."""
         st = self.state
