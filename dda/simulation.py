@@ -80,6 +80,12 @@ class Simulation:
         OPEN-CLOSE passes allowed before the step is cut.
     record_every : int
         Record (and write) every this many steps.
+    max_displacement_ratio : float
+        Largest distance a free block's vertex may move in one step, as a fraction of the
+        block's size (the square root of its area). A step that moves a block farther is
+        cut, as is one whose OPEN-CLOSE iteration does not settle or whose Newton iteration
+        does not converge; dt grows back (doubling) after ``GROW_AFTER`` quiet steps. Every
+        cut is in ``result.stats.cuts`` as (time, dt, reason).
     output : writer, optional
         For example ``dda.io.VTUWriter("out/case")``; can also be given to :meth:`run`.
 
@@ -97,7 +103,8 @@ class Simulation:
 
     def __init__(self, scene: Scene, dt: float, solver: NonlinearSolver | None = None,
                  analysis: str = "dynamic", velocity_carry: float = 1.0,
-                 max_open_close: int = 12, record_every: int = 1, output=None):
+                 max_open_close: int = 12, record_every: int = 1, output=None,
+                 max_displacement_ratio: float = 0.25):
         if not isinstance(scene, Scene):
             raise TypeError(f"Simulation: scene must be a dda.Scene, got {scene!r}")
         self.dt = finite_number("dt", dt, positive=True, where="Simulation")
@@ -116,6 +123,8 @@ class Simulation:
             raise ValueError("Simulation: max_open_close must be at least 1")
         if int(record_every) < 1:
             raise ValueError("Simulation: record_every must be at least 1")
+        self.max_displacement_ratio = finite_number(
+            "max_displacement_ratio", max_displacement_ratio, positive=True, where="Simulation")
         scene.validate()
         self.scene = scene
         self.solver = solver
@@ -330,12 +339,23 @@ class Simulation:
             return None, sol
         d = sol.d
         move = geometry.vertex_displacements(st.x, centroid[self.topo.block], d[self.topo.block])
-        largest = float(np.max(np.hypot(move[:, 0], move[:, 1])))
+        distance = np.hypot(move[:, 0], move[:, 1])
+        largest = float(np.max(distance))
         if largest > d0:
             sol.converged = False
             sol.reason = (f"a vertex moved {largest:.3g} m, beyond the contact search distance "
                           f"{d0:.3g} m")
             sol.search_hint = largest
+            return None, sol
+        per_block = np.zeros(self.n_blocks)
+        np.maximum.at(per_block, self.topo.block, distance)
+        ratio = np.where(self.free, per_block / self.size, 0.0)
+        worst = int(np.argmax(ratio))
+        if ratio[worst] > self.max_displacement_ratio:
+            sol.converged = False
+            sol.reason = (f"{self.scene.blocks[worst]} moved {per_block[worst]:.3g} m in one "
+                          f"step, more than max_displacement_ratio {self.max_displacement_ratio:g}"
+                          f" of its size {self.size[worst]:.3g} m")
             return None, sol
         vel = np.where(self.free[:, None], updated_velocity(d, v_eff, dt), 0.0)
         vel[~self.free, :2] = known_v[~self.free]

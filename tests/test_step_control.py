@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 
 import dda
+from dda.contact import CoulombSingle, JointMaterial
 from dda.materials import LinearElastic
 from dda.solvers import NewtonRaphson
-from tests.conftest import shaken_block_scene
+from tests.conftest import box, shaken_block_scene
 
 ROCK = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
 
@@ -67,3 +68,29 @@ def test_a_run_that_cannot_go_on_says_when_and_why_and_keeps_its_steps(tmp_path)
     assert partial.time[-1] == pytest.approx(0.05)
     assert writer.pvd_path.exists() and len(writer.files) == 51
     assert sim.state.time == pytest.approx(0.05)  # the committed state is the last good one
+
+
+def test_a_step_that_moves_a_block_too_far_is_cut_and_dt_grows_back():
+    """A block shot along a rough floor at 5 m/s: dt 0.05 s would move it 1.25 sizes per
+    step. Steps are cut until it moves at most a tenth of its size, and grow back to the full
+    dt once it has slowed down."""
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(-1, -0.5, 12, 0.5), rock, fixed=True)
+    shot = scene.add_block(box(0, 0, 0.2, 0.2), rock, velocity=(5.0, 0.0), name="shot")
+    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                                  friction=CoulombSingle(phi=30.0)))
+    sim = dda.Simulation(scene, dt=0.05, max_displacement_ratio=0.1)
+    result = sim.run(1.5)
+    reasons = [c[2] for c in result.stats.cuts]
+    # (the first, longest tries also fail to converge; those cuts say so)
+    assert any("'shot' moved" in r and "max_displacement_ratio 0.1" in r for r in reasons)
+    step_moves = np.hypot(*np.diff(result.displacement(shot)[:, :2], axis=0).T)
+    assert step_moves.max() <= 0.1 * 0.2 * (1 + 1e-9)
+    dt = np.asarray(result.stats.dt)
+    assert dt.min() < 0.01 and dt[-3] == pytest.approx(0.05)  # cut, then grown back
+    # and it stops where Coulomb says: v^2 / (2 mu g)
+    stop = 25.0 / (2 * np.tan(np.radians(30.0)) * 9.81)
+    assert result.displacement(shot)[-1, 0] == pytest.approx(stop, rel=0.02)
+    with pytest.raises(ValueError, match="max_displacement_ratio"):
+        dda.Simulation(scene, dt=0.05, max_displacement_ratio=0.0)
