@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dda import geometry
+
 
 @dataclass
 class Watched:
@@ -43,8 +45,6 @@ def energy_scale(sim) -> float:
     """The energy a scene can set free: its kinetic energy plus the potential energy of every
     block above the scene's lowest point."""
     e = sim.energy()
-    from dda import geometry
-
     ints = geometry.polygon_integrals(sim.state.x, sim.offsets)
     g = sim.scene.gravity or 0.0
     drop = ints.centroid[:, 1] - sim.state.x[:, 1].min()
