@@ -6,7 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Result", "StepStats", "Frame"]
+from dda.profiling import SECTIONS
+
+__all__ = ["Result", "StepStats", "Frame", "CostProfile"]
 
 
 @dataclass
@@ -35,12 +37,15 @@ class StepStats:
 
     Fields: time, dt, iterations (legacy: linear solves; Newton: iterations after OPEN-CLOSE),
     open_close_passes, contacts (vertex-edge pairs tracked), closed (closed contacts), retries
-    (failed tries before the step went through), wall_time (s). ``residual_norms`` holds the
-    Newton out-of-balance norms of every step and ``cuts`` every dt cut as (time, dt, reason).
+    (failed tries before the step went through), wall_time (s), solves (linear solves, retries
+    included) and the seconds spent in each part of the step (retries included):
+    detection_time, contact_element_time, return_map_time, assembly_time, solve_time (see
+    :mod:`dda.profiling`). ``residual_norms`` holds the Newton out-of-balance norms of every
+    step and ``cuts`` every dt cut as (time, dt, reason).
     """
 
     FIELDS = ("time", "dt", "iterations", "open_close_passes", "contacts", "closed", "retries",
-              "wall_time")
+              "wall_time", "solves") + tuple(f"{name}_time" for name in SECTIONS)
 
     def __init__(self):
         self._rows = {k: [] for k in self.FIELDS}
@@ -161,9 +166,78 @@ class Result:
                 out[i, 1] = f @ np.array([n[1], -n[0]])
         return out
 
-    def profile(self) -> str:
-        """A one-line summary of the run's cost."""
-        return self.stats.summary()
+    def profile(self) -> CostProfile:
+        """Where the run's time went: seconds per part of the step and the work counts.
+
+        ``print(result.profile())`` shows a table; ``result.profile().summary`` the
+        one-line summary of :meth:`StepStats.summary`.
+        """
+        return CostProfile.from_stats(self.stats)
 
     def __repr__(self):
         return f"Result({len(self._time)} recorded steps, {len(self._names)} blocks)"
+
+
+@dataclass
+class CostProfile:
+    """The cost of a run: seconds per part of the step and what the solver did.
+
+    Attributes
+    ----------
+    steps : steps taken
+    wall : wall time of the steps (s), retries included
+    seconds : seconds per part (:data:`dda.profiling.SECTIONS`) and ``other`` (the rest:
+        block matrices, Newmark update, bookkeeping)
+    contacts_mean, contacts_max : tracked vertex-edge contacts per step
+    open_close_passes, iterations, solves : totals over the run (iterations: Newton
+        iterations after OPEN-CLOSE, or legacy's solves)
+    cuts : dt cuts
+    summary : the one-line summary (:meth:`StepStats.summary`)
+    """
+
+    steps: int
+    wall: float
+    seconds: dict
+    contacts_mean: float
+    contacts_max: int
+    open_close_passes: int
+    iterations: int
+    solves: int
+    cuts: int
+    summary: str
+
+    @classmethod
+    def from_stats(cls, stats: StepStats) -> CostProfile:
+        n = len(stats)
+        seconds = {name: float(stats[f"{name}_time"].sum()) if n else 0.0 for name in SECTIONS}
+        wall = float(stats["wall_time"].sum()) if n else 0.0
+        seconds["other"] = max(wall - sum(seconds.values()), 0.0)
+        contacts = stats["contacts"] if n else np.zeros(1)
+        return cls(
+            steps=n, wall=wall, seconds=seconds, contacts_mean=float(contacts.mean()),
+            contacts_max=int(contacts.max()),
+            open_close_passes=int(stats["open_close_passes"].sum()) if n else 0,
+            iterations=int(stats["iterations"].sum()) if n else 0,
+            solves=int(stats["solves"].sum()) if n else 0, cuts=len(stats.cuts),
+            summary=stats.summary(),
+        )
+
+    def fractions(self) -> dict:
+        """Share of the wall time per part (sums to 1 when any time was spent)."""
+        return {k: (v / self.wall if self.wall > 0 else 0.0) for k, v in self.seconds.items()}
+
+    def __str__(self) -> str:
+        lines = [self.summary]
+        if not self.steps:
+            return lines[0]
+        per = 1e3 / self.steps
+        lines.append(f"{'part':16s} {'s':>9s} {'ms/step':>9s} {'share':>7s}")
+        for name, sec in self.seconds.items():
+            lines.append(f"{name:16s} {sec:9.3f} {sec * per:9.3f} "
+                         f"{100 * self.fractions()[name]:6.1f}%")
+        lines.append(
+            f"contacts {self.contacts_mean:.1f} on average (max {self.contacts_max}); "
+            f"{self.open_close_passes / self.steps:.2f} OPEN-CLOSE passes, "
+            f"{self.iterations / self.steps:.2f} iterations and "
+            f"{self.solves / self.steps:.2f} linear solves per step")
+        return "\n".join(lines)

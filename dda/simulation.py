@@ -19,6 +19,7 @@ from dda.contact.contacts import OPEN, ContactSet, carry_over
 from dda.contact.detection import VertexTopology, narrow_phase
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.kinematics import contact_geometry
+from dda.profiling import StepProfile, section
 from dda.result import Frame, Result
 from dda.scene import Scene
 from dda.solvers.base import NonlinearSolver, StepProblem
@@ -317,9 +318,10 @@ class Simulation:
         d0 = self._search_distance(dt, centroid, d_known[~self.free, :2])
         pen_limit = max(2.0 * d0, 1e-3 * float(np.min(self.size)),
                         2.0 * self._deepest_penetration() + d0)
-        cand = narrow_phase(st.x, self.topo, d0, pen_limit)
-        contacts, fresh = carry_over(st.contacts, cand, st.x, self.topo.nxt, self.topo.prv,
-                                     self.n_blocks)
+        with section("detection"):
+            cand = narrow_phase(st.x, self.topo, d0, pen_limit)
+            contacts, fresh = carry_over(st.contacts, cand, st.x, self.topo.nxt, self.topo.prv,
+                                         self.n_blocks)
         joint = self._joint_index(contacts.bj, contacts.bk)
         if np.any(joint < 0):
             i = int(np.flatnonzero(joint < 0)[0])
@@ -448,6 +450,7 @@ class Simulation:
         """Take one step, cutting dt as often as needed; commit it and log its stats."""
         tries = 0
         widened = 0
+        profile = StepProfile()
         start = _time.perf_counter()
         while True:
             remaining = t_end - self.state.time
@@ -455,7 +458,8 @@ class Simulation:
             if remaining - dt < 1e-6 * dt:
                 dt = remaining  # no sliver of a step left over at the end
             snaps = self._snapshots()
-            new, sol = self._try_step(dt)
+            with profile.active():
+                new, sol = self._try_step(dt)
             if new is not None:
                 break
             self._restore(snaps)
@@ -486,7 +490,9 @@ class Simulation:
             time=new.time, dt=dt, iterations=sol.iterations,
             open_close_passes=sol.open_close_passes, contacts=len(c),
             closed=int(np.count_nonzero(c.state != OPEN)), retries=tries,
-            wall_time=_time.perf_counter() - start, residual_norms=sol.residual_norms,
+            wall_time=_time.perf_counter() - start, solves=profile.solves,
+            residual_norms=sol.residual_norms,
+            **{f"{name}_time": sec for name, sec in profile.seconds.items()},
         )
 
     # ------------------------------------------------------------------ recording

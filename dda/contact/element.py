@@ -21,6 +21,7 @@ from dda.contact.kinematics import (
     trial_kinematics,
     tributary_length,
 )
+from dda.profiling import section
 
 __all__ = ["ContactElement", "LawGroups"]
 
@@ -66,6 +67,12 @@ class LawGroups:
         Returns shear force, slipping flag and the trial history as full-length arrays; with
         ``normal_penalty`` given, also the consistent tangent (d t_s/d g_s, d t_s/d g_n).
         """
+        with section("return_map"):
+            return self._return_map(history, delta_g_s, t_n, shear_penalty, length, where,
+                                    normal_penalty)
+
+    def _return_map(self, history, delta_g_s, t_n, shear_penalty, length, where,
+                    normal_penalty):
         m = len(delta_g_s)
         t_s = np.zeros(m)
         slipping = np.zeros(m, dtype=bool)
@@ -97,14 +104,16 @@ class LawGroups:
 
     def elastic_update(self, history, delta_g_s, where):
         """History after an elastic (stick) step of the contacts in ``where`` (in a copy)."""
-        out = {k: v.copy() for k, v in history.items()}
-        for law, idx in self.groups:
-            idx = idx[where[idx]]
-            if len(idx) == 0:
-                continue
-            for k, v in law.elastic_update(self._select(history, law, idx), delta_g_s[idx]).items():
-                out[k][idx] = v
-        return out
+        with section("return_map"):
+            out = {k: v.copy() for k, v in history.items()}
+            for law, idx in self.groups:
+                idx = idx[where[idx]]
+                if len(idx) == 0:
+                    continue
+                update = law.elastic_update(self._select(history, law, idx), delta_g_s[idx])
+                for k, v in update.items():
+                    out[k][idx] = v
+            return out
 
 
 @dataclass
@@ -140,6 +149,10 @@ class ContactElement:
 
     def __init__(self, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
                  shear_penalty, laws: LawGroups):
+        with section("contact_element"):
+            self._build(contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws)
+
+    def _build(self, contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws):
         self.contacts = contacts
         self.bj = contacts.bj
         self.bk = contacts.bk
@@ -169,10 +182,11 @@ class ContactElement:
 
     def linear_gaps(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Normal gap and shear increment linearized at the step's start: g_n0 + E d, I d."""
-        dd = self.pair_increments(d)
-        gap = self.gap0 + np.einsum("mi,mi->m", self.e_row, dd)
-        dgs = np.einsum("mi,mi->m", self.i_row, dd)
-        return gap, dgs
+        with section("contact_element"):
+            dd = self.pair_increments(d)
+            gap = self.gap0 + np.einsum("mi,mi->m", self.e_row, dd)
+            dgs = np.einsum("mi,mi->m", self.i_row, dd)
+            return gap, dgs
 
     def legacy_contributions(self, state, g_se, t_s_slip):
         """Stiffness and force of original DDA's springs (METHOD.md section 4, legacy terms).
@@ -185,6 +199,10 @@ class ContactElement:
         -------
         k : (m, 12, 12) and f : (m, 12)
         """
+        with section("contact_element"):
+            return self._legacy_contributions(state, g_se, t_s_slip)
+
+    def _legacy_contributions(self, state, g_se, t_s_slip):
         closed = state != 0
         stick = state == STICK
         slip = state == SLIP
@@ -210,6 +228,10 @@ class ContactElement:
         k_sn couples the normal and the shear gap on a slipping contact (unsymmetric K).
         Every trial starts from the committed history, so nothing here needs undoing.
         """
+        with section("contact_element"):
+            return self._response(d)
+
+    def _response(self, d: np.ndarray) -> ContactResponse:
         dd = self.pair_increments(d)
         a1, a2, a3 = self.maps
         g = self.geometry

@@ -12,6 +12,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from dda.profiling import count_solve, section
+
 __all__ = ["assemble_and_solve", "assemble_vector", "DENSE_LIMIT"]
 
 DENSE_LIMIT = 300
@@ -40,14 +42,28 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known):
     -------
     d : (n_blocks, 6), the free blocks solved and the known ones as given
     """
+    with section("assembly"):
+        n, k, rhs, free_blocks = _assemble(block_k, block_f, free, bj, bk, pair_k, pair_f,
+                                           d_known)
+    d = d_known.copy()
+    if n == 0:
+        return d
+    with section("solve"):
+        count_solve()
+        sol = _solve(k, rhs)
+    d[free_blocks] = sol.reshape(-1, 6)
+    return d
+
+
+def _assemble(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known):
+    """The free blocks' matrix (dense up to ``DENSE_LIMIT`` unknowns, else CSC) and rhs."""
     n_blocks = len(free)
     slot = np.full(n_blocks, -1, dtype=np.int64)
     free_blocks = np.flatnonzero(free)
     slot[free_blocks] = np.arange(len(free_blocks))
     n = 6 * len(free_blocks)
-    d = d_known.copy()
     if n == 0:
-        return d
+        return 0, None, None, free_blocks
 
     rhs = block_f[free_blocks].reshape(-1).copy()
     rows = [(6 * slot[free_blocks])[:, None, None] + _I6]
@@ -74,17 +90,23 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known):
     v = np.concatenate([x.reshape(-1) for x in vals])
     if n <= DENSE_LIMIT:
         k = np.bincount(r * n + c, weights=v, minlength=n * n).reshape(n, n)
+    else:
+        k = sp.csc_matrix((v, (r, c)), shape=(n, n))
+    return n, k, rhs, free_blocks
+
+
+def _solve(k, rhs):
+    """Factorize and solve: dense LAPACK for an ndarray, SuperLU for a sparse matrix."""
+    if isinstance(k, np.ndarray):
         try:
             sol = np.linalg.solve(k, rhs)
         except np.linalg.LinAlgError as exc:
             raise SingularSystemError(str(exc)) from None
     else:
-        k = sp.csc_matrix((v, (r, c)), shape=(n, n))
         sol = spla.spsolve(k, rhs)
     if not np.all(np.isfinite(sol)):
         raise SingularSystemError("the step's system has no finite solution")
-    d[free_blocks] = sol.reshape(-1, 6)
-    return d
+    return sol
 
 
 def assemble_vector(block_f, free, bj, bk, pair_f):
@@ -92,9 +114,10 @@ def assemble_vector(block_f, free, bj, bk, pair_f):
 
     Rows of blocks without unknowns are set to zero (their forces are reactions).
     """
-    out = block_f.copy()
-    if len(bj):
-        np.add.at(out, bj, pair_f[:, :6])
-        np.add.at(out, bk, pair_f[:, 6:])
-    out[~free] = 0.0
-    return out
+    with section("assembly"):
+        out = block_f.copy()
+        if len(bj):
+            np.add.at(out, bj, pair_f[:, :6])
+            np.add.at(out, bk, pair_f[:, 6:])
+        out[~free] = 0.0
+        return out

@@ -1,0 +1,266 @@
+"""Sweeps: run many settings of a study on any executor and collect one row per run.
+
+A :class:`Study` turns settings (a dict such as ``{"solver": "newton", "dt": 1e-3,
+"penalty": 2e9}``) into a simulation, a duration and a way to measure the error of the result
+against the study's reference. A :class:`Case` is one study with one set of settings;
+:func:`sweep` runs cases on a :class:`concurrent.futures.Executor` (local processes by default;
+a Dask client's ``client.get_executor()`` works unchanged) and returns one row per case, in the
+order of the cases, with the settings, the error, the CPU time, the steps, the iterations and
+where the time went (:mod:`dda.profiling`).
+
+Studies and settings travel to worker processes by pickling: define a study as a class at
+module level (not a lambda or a local function).
+
+Examples
+--------
+>>> from concurrent.futures import ThreadPoolExecutor
+>>> from dda.studies.sweep import grid, sweep
+>>> from dda.studies.studies import MovingBase
+>>> cases = grid(MovingBase(duration=0.2), solver=["legacy", "newton"], dt=[1e-2],
+...              penalty=[2e9])
+>>> with ThreadPoolExecutor(2) as pool:
+...     rows = sweep(cases, executor=pool, progress=False)
+>>> [(r["solver"], r["steps"], r["status"]) for r in rows]
+[('legacy', 20, 'ok'), ('newton', 20, 'ok')]
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import math
+import os
+import sys
+import threading
+import time
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from dda.profiling import SECTIONS
+from dda.simulation import Simulation, SimulationError
+
+__all__ = ["Study", "Case", "grid", "run_case", "sweep", "write_csv", "markdown_table",
+           "pareto_front", "cheapest", "SOLVERS"]
+
+
+def _solvers():
+    from dda.solvers import LegacyPullBack, NewtonRaphson
+
+    return {"legacy": LegacyPullBack, "newton": NewtonRaphson}
+
+
+#: solver names a study's ``solver`` setting may take
+SOLVERS = ("legacy", "newton")
+
+
+def make_solver(name: str):
+    """The solver called ``name`` ("legacy" or "newton") with its default settings."""
+    try:
+        return _solvers()[name]()
+    except KeyError:
+        raise ValueError(f"unknown solver {name!r}; use one of {', '.join(SOLVERS)}") from None
+
+
+class Study(ABC):
+    """A scene with a reference answer, to be run at many settings.
+
+    Subclasses set ``name`` and implement :meth:`prepare`.
+    """
+
+    name = "study"
+
+    @abstractmethod
+    def prepare(self, **settings) -> tuple[Simulation, float, Callable]:
+        """The simulation for these settings, its duration (s) and ``error(result)``.
+
+        ``error`` returns the relative error against the study's reference (0.01 is 1%), or
+        a dict with that under ``"error"`` and other measures beside it (they become columns
+        of the row).
+        """
+
+    def __repr__(self):
+        return f"{type(self).__name__}()"
+
+
+@dataclass(frozen=True)
+class Case:
+    """One run of a sweep: a study and its settings."""
+
+    study: Study
+    settings: dict = field(default_factory=dict)
+
+
+def grid(study: Study, **axes: Sequence) -> list[Case]:
+    """Every combination of the given settings, as cases (the last axis varies fastest).
+
+    >>> from dda.studies.studies import MovingBase
+    >>> [c.settings for c in grid(MovingBase(), solver=["legacy"], dt=[1e-2, 1e-3])]
+    [{'solver': 'legacy', 'dt': 0.01}, {'solver': 'legacy', 'dt': 0.001}]
+    """
+    if not axes:
+        return [Case(study, {})]
+    for name, values in axes.items():
+        if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+            raise TypeError(f"grid: axis {name!r} must be a list of values, got {values!r}")
+    names = list(axes)
+    return [Case(study, dict(zip(names, combo, strict=True)))
+            for combo in itertools.product(*(list(axes[n]) for n in names))]
+
+
+def _cpu_clock():
+    # in a worker thread (a threaded Dask worker) the process clock counts the other threads
+    # too; in a worker process (the default) it also counts BLAS threads, as it should
+    if threading.current_thread() is threading.main_thread():
+        return time.process_time
+    return time.thread_time
+
+
+def run_case(case: Case) -> dict:
+    """Run one case and return its row (see :func:`sweep`); a failed run is a row too."""
+    if not isinstance(case, Case):
+        raise TypeError(f"run_case: expected a Case, got {case!r}")
+    sim, duration, error = case.study.prepare(**case.settings)
+    clock = _cpu_clock()
+    cpu0, wall0 = clock(), time.perf_counter()
+    status = "ok"
+    try:
+        result = sim.run(duration, progress=False)
+    except SimulationError as exc:
+        result = exc.result
+        status = f"failed at t = {sim.state.time:.4g} s: {exc}"
+    cpu = clock() - cpu0
+    wall = time.perf_counter() - wall0
+    measures = error(result) if status == "ok" else {"error": math.nan}
+    if not isinstance(measures, dict):
+        measures = {"error": measures}
+    st = result.stats
+    row = {"study": case.study.name, **case.settings,
+           **{k: float(v) for k, v in measures.items()}, "cpu_time": cpu,
+           "wall_time": wall, "steps": len(st), "iterations": int(st["iterations"].sum()),
+           "open_close_passes": int(st["open_close_passes"].sum()),
+           "solves": int(st["solves"].sum()), "dt_cuts": len(st.cuts),
+           "contacts_max": int(st["contacts"].max()) if len(st) else 0, "status": status}
+    for name in SECTIONS:
+        row[f"{name}_time"] = float(st[f"{name}_time"].sum())
+    return row
+
+
+def sweep(cases: Sequence[Case], executor: Executor | None = None,
+          progress: bool | None = None) -> list[dict]:
+    """Run every case on ``executor`` and return their rows in the order of ``cases``.
+
+    Parameters
+    ----------
+    cases : sequence of Case
+    executor : concurrent.futures.Executor, optional
+        Where the runs go. Default: a process pool with one worker per core. A Dask
+        distributed client's executor (``client.get_executor()``) runs them on its cluster.
+    progress : bool, optional
+        A progress bar on stderr (cases done, the last one, elapsed and remaining time). By
+        default on when stderr is a terminal.
+
+    Returns
+    -------
+    list of dict
+        Per case: ``study``, the settings, ``error`` (relative, NaN for a failed run),
+        ``cpu_time`` and ``wall_time`` (s, of the run alone), ``steps``, ``iterations``,
+        ``open_close_passes``, ``solves``, ``dt_cuts``, ``contacts_max``, ``status`` ("ok" or
+        why it stopped) and the seconds per part of the step (``detection_time`` ...).
+    """
+    cases = list(cases)
+    for i, c in enumerate(cases):
+        if not isinstance(c, Case):
+            raise TypeError(f"sweep: case {i} is not a Case: {c!r}")
+    if progress is None:
+        progress = sys.stderr.isatty()
+    own = executor is None
+    if own:
+        executor = ProcessPoolExecutor(max_workers=min(len(cases), os.cpu_count() or 1) or 1)
+    rows: list[dict | None] = [None] * len(cases)
+    start = time.perf_counter()
+    try:
+        futures = {executor.submit(run_case, c): i for i, c in enumerate(cases)}
+        for done, fut in enumerate(as_completed(futures), start=1):
+            i = futures[fut]
+            rows[i] = fut.result()
+            if progress:
+                _report(done, len(cases), time.perf_counter() - start, rows[i])
+    finally:
+        if own:
+            executor.shutdown(cancel_futures=True)
+        if progress:
+            sys.stderr.write("\n")
+    return rows
+
+
+def _report(done, total, elapsed, row):
+    frac = done / total
+    bar = "#" * int(30 * frac)
+    eta = elapsed * (1 - frac) / frac
+    label = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
+                      for k, v in row.items() if k not in _OUTCOME)
+    sys.stderr.write(f"\r  [{bar:<30}] {done}/{total}  {elapsed:6.1f} s, eta {eta:6.1f} s  "
+                     f"{label[:60]:<60}")
+    sys.stderr.flush()
+
+
+_OUTCOME = {"error", "cpu_time", "wall_time", "steps", "iterations", "open_close_passes",
+            "solves", "dt_cuts", "contacts_max", "status"} | {f"{n}_time" for n in SECTIONS}
+
+
+def write_csv(rows: Sequence[dict], path) -> Path:
+    """Write rows to a CSV file (columns in the order of the first row)."""
+    path = Path(path)
+    columns = list(dict.fromkeys(k for r in rows for k in r))
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=columns)
+        w.writeheader()
+        w.writerows(rows)
+    return path
+
+
+def markdown_table(rows: Sequence[dict], columns: Sequence[str],
+                   formats: dict | None = None) -> str:
+    """A markdown table of the given columns; ``formats`` maps a column to a format spec."""
+    formats = formats or {}
+    lines = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+    for r in rows:
+        cells = []
+        for c in columns:
+            v = r.get(c, "")
+            spec = formats.get(c)
+            cells.append(format(v, spec) if spec and isinstance(v, (int, float)) else str(v))
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def pareto_front(rows: Sequence[dict], cost: str = "cpu_time", error: str = "error") -> list:
+    """The rows no other row beats in both cost and error, cheapest first.
+
+    Rows with a NaN error (failed runs) are left out.
+
+    >>> rows = [{"cpu_time": 1, "error": 0.1}, {"cpu_time": 2, "error": 0.2},
+    ...         {"cpu_time": 3, "error": 0.01}]
+    >>> [r["cpu_time"] for r in pareto_front(rows)]
+    [1, 3]
+    """
+    ok = [r for r in rows if np.isfinite(r[error])]
+    ok.sort(key=lambda r: (r[cost], abs(r[error])))
+    front, best = [], math.inf
+    for r in ok:
+        if abs(r[error]) < best:
+            front.append(r)
+            best = abs(r[error])
+    return front
+
+
+def cheapest(rows: Sequence[dict], tolerance: float, cost: str = "cpu_time",
+             error: str = "error") -> dict | None:
+    """The cheapest row whose ``|error|`` is at most ``tolerance`` (None if there is none)."""
+    ok = [r for r in rows if np.isfinite(r[error]) and abs(r[error]) <= tolerance]
+    return min(ok, key=lambda r: r[cost]) if ok else None

@@ -1,0 +1,159 @@
+"""The sweep runner: cases on any executor (processes, threads, Dask), rows, Pareto fronts."""
+
+from __future__ import annotations
+
+import csv
+import math
+from concurrent.futures import ThreadPoolExecutor
+
+import distributed
+import numpy as np
+import pytest
+
+import dda
+from dda.materials import LinearElastic
+from dda.studies.studies import DirectShear, MovingBase
+from dda.studies.sweep import (
+    Case,
+    Study,
+    cheapest,
+    grid,
+    markdown_table,
+    pareto_front,
+    run_case,
+    sweep,
+    write_csv,
+)
+
+DETERMINISTIC = ("study", "solver", "dt", "penalty", "error", "peak_error", "steps",
+                 "iterations", "open_close_passes", "solves", "dt_cuts", "status")
+
+
+def small_grid():
+    return grid(MovingBase(duration=0.3), solver=["legacy", "newton"], dt=[1e-2, 5e-3],
+                penalty=[2e9])
+
+
+def test_grid_is_the_product_of_the_axes():
+    cases = grid(MovingBase(), solver=["legacy", "newton"], dt=[1e-2, 1e-3, 1e-4],
+                 penalty=[2e7, 2e9])
+    assert len(cases) == 12
+    assert cases[0].settings == {"solver": "legacy", "dt": 1e-2, "penalty": 2e7}
+    assert cases[-1].settings == {"solver": "newton", "dt": 1e-4, "penalty": 2e9}
+    assert len({tuple(c.settings.values()) for c in cases}) == 12
+
+
+def test_grid_rejects_a_bare_value():
+    with pytest.raises(TypeError, match="axis 'dt' must be a list"):
+        grid(MovingBase(), dt=1e-3)
+
+
+def test_unknown_solver_is_named():
+    with pytest.raises(ValueError, match="unknown solver 'implicit'"):
+        run_case(Case(MovingBase(duration=0.2), {"solver": "implicit"}))
+
+
+def test_sweep_needs_cases():
+    with pytest.raises(TypeError, match="case 0 is not a Case"):
+        sweep([{"solver": "newton"}], executor=ThreadPoolExecutor(1))
+
+
+def test_process_pool_and_dask_give_the_same_rows():
+    cases = small_grid()
+    rows = sweep(cases, progress=False)  # the default: local processes
+    assert [(r["solver"], r["dt"]) for r in rows] == [
+        (c.settings["solver"], c.settings["dt"]) for c in cases]
+    for r in rows:
+        assert r["status"] == "ok"
+        assert r["steps"] == round(0.3 / r["dt"])
+        assert r["cpu_time"] > 0.0 and r["wall_time"] > 0.0
+        assert 0.0 < r["error"] < 1.0
+        assert r["solves"] >= r["steps"]
+        assert r["contacts_max"] == 2
+        parts = sum(r[f"{n}_time"] for n in dda.profiling.SECTIONS)
+        assert 0.0 < parts <= r["wall_time"]
+
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        dask_rows = sweep(cases, executor=client.get_executor(), progress=False)
+    for a, b in zip(rows, dask_rows, strict=True):
+        assert {k: a[k] for k in DETERMINISTIC} == {k: b[k] for k in DETERMINISTIC}
+
+
+def test_the_errors_tell_good_settings_from_bad():
+    rows = sweep(grid(MovingBase(duration=0.5), solver=["newton", "legacy"], dt=[1e-3],
+                      penalty=[2e9])
+                 + grid(DirectShear(), solver=["newton", "legacy"], dt=[0.05],
+                        penalty=[1e10]),
+                 executor=ThreadPoolExecutor(2), progress=False)
+    moving_newton, moving_legacy, shear_newton, shear_legacy = rows
+    assert moving_newton["error"] < 0.02 and abs(moving_newton["peak_error"]) < 0.01
+    assert moving_legacy["error"] < 0.05
+    # direct shear in 20 steps: Newton holds the strength, legacy overshoots by 32%
+    # (examples/direct_shear.py)
+    assert shear_newton["error"] < 1e-3
+    assert shear_legacy["overshoot"] == pytest.approx(0.3209, abs=2e-3)
+    assert shear_legacy["error"] == pytest.approx(shear_legacy["overshoot"])
+
+
+class TooFast(Study):
+    """A block allowed to move a billionth of its size per step: every step is cut."""
+
+    name = "too_fast"
+
+    def prepare(self, dt=1e-2):
+        scene = dda.Scene()
+        scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)],
+                        LinearElastic(young=1e9, poisson=0.2, density=1000.0),
+                        velocity=(10.0, 0.0))
+        sim = dda.Simulation(scene, dt=dt, max_displacement_ratio=1e-9)
+        return sim, 0.1, lambda result: 0.0
+
+
+def test_a_failed_run_is_a_row_with_its_reason():
+    rows = sweep([Case(TooFast(), {"dt": 1e-2}),
+                  Case(MovingBase(duration=0.2), {"solver": "legacy", "dt": 1e-2})],
+                 executor=ThreadPoolExecutor(2), progress=False)
+    assert rows[0]["status"].startswith("failed at t = 0 s")
+    assert "max_displacement_ratio" in rows[0]["status"]
+    assert math.isnan(rows[0]["error"])
+    assert rows[0]["steps"] == 0
+    assert rows[1]["status"] == "ok"
+
+
+def test_progress_bar_counts_the_cases(capsys):
+    sweep(grid(MovingBase(duration=0.2), solver=["legacy"], dt=[1e-2, 2e-2]),
+          executor=ThreadPoolExecutor(1), progress=True)
+    err = capsys.readouterr().err
+    assert "1/2" in err and "2/2" in err
+
+
+def rows_for_fronts():
+    return [
+        {"solver": "a", "cpu_time": 1.0, "error": 0.5},
+        {"solver": "a", "cpu_time": 2.0, "error": 0.05},
+        {"solver": "a", "cpu_time": 3.0, "error": 0.08},  # dominated
+        {"solver": "a", "cpu_time": 4.0, "error": -0.005},
+        {"solver": "a", "cpu_time": 0.5, "error": math.nan},  # failed
+    ]
+
+
+def test_pareto_front_and_cheapest():
+    rows = rows_for_fronts()
+    assert [r["cpu_time"] for r in pareto_front(rows)] == [1.0, 2.0, 4.0]
+    assert cheapest(rows, 0.01)["cpu_time"] == 4.0
+    assert cheapest(rows, 0.1)["cpu_time"] == 2.0
+    assert cheapest(rows, 1e-4) is None
+
+
+def test_csv_and_markdown(tmp_path):
+    rows = rows_for_fronts()
+    path = write_csv(rows, tmp_path / "rows.csv")
+    with open(path) as f:
+        back = list(csv.DictReader(f))
+    assert [float(r["cpu_time"]) for r in back] == [r["cpu_time"] for r in rows]
+    table = markdown_table(rows[:2], ["solver", "cpu_time", "error"],
+                           {"cpu_time": ".2f", "error": ".1%"})
+    assert table.splitlines()[2] == "| a | 1.00 | 50.0% |"
+    assert np.isnan(float(back[-1]["error"]))
