@@ -77,6 +77,9 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
     state[closed0 & over] = SLIP
     # legacy's explicit rule spares only the contacts that start the step sticking
     spared = (state == STICK) if explicit else np.zeros(m, dtype=bool)
+    # a contact that starts the step touching or penetrating is first tried closed: started
+    # open, a stack of n touching blocks would need n passes to close from the bottom up
+    state[(state == OPEN) & (el.gap0 <= 0.0)] = STICK
     t_n_lag = c.t_n.copy()
     dgs_prev = zero
     passes = 0
