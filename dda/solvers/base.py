@@ -9,11 +9,14 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
 from dda.contact.contacts import ContactSet
 from dda.contact.element import ContactElement
+from dda.profiling import section
+from dda.solvers.linear import SystemPattern
 
 __all__ = ["NonlinearSolver", "StepProblem", "StepSolution"]
 
@@ -40,6 +43,12 @@ class StepProblem:
     d_known: np.ndarray
     element: ContactElement
     max_open_close: int = 12
+
+    @cached_property
+    def pattern(self) -> SystemPattern:
+        """The assembly's index work for this step's blocks and contacts (built once)."""
+        with section("assembly"):
+            return SystemPattern(self.free, self.element.bj, self.element.bk)
 
 
 @dataclass

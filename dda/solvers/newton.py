@@ -102,7 +102,8 @@ class NewtonRaphson(NonlinearSolver):
                     f"(|R| = {norm:.3g}, {norm / scale:.3g} of the forces)"), norms)
             try:
                 step = assemble_and_solve(problem.block_k, -block_r, free, el.bj, el.bk,
-                                          resp.stiffness, -resp.residual, zero_known)
+                                          resp.stiffness, -resp.residual, zero_known,
+                                          problem.pattern)
             except SingularSystemError as exc:
                 return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
             d = d + step

@@ -94,7 +94,7 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         k, f = el.legacy_contributions(state, history["g_se"], t_slip)
         try:
             d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
-                                   el.bk, k, f, problem.d_known)
+                                   el.bk, k, f, problem.d_known, problem.pattern)
         except SingularSystemError as exc:
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         gap, dgs = el.linear_gaps(d)
