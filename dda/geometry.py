@@ -73,7 +73,8 @@ def signed_areas(vertices: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     return 0.5 * np.add.reduceat(cross, offsets[:-1])
 
 
-def polygon_integrals(vertices: np.ndarray, offsets: np.ndarray) -> PolygonIntegrals:
+def polygon_integrals(vertices: np.ndarray, offsets: np.ndarray,
+                      nxt: np.ndarray | None = None) -> PolygonIntegrals:
     """Polygon integrals of every block by Green's theorem over its edges (METHOD.md section 1).
 
     With ``c_i = x_i y_{i+1} - x_{i+1} y_i`` summed over the edges of a counter-clockwise polygon:
@@ -82,10 +83,12 @@ def polygon_integrals(vertices: np.ndarray, offsets: np.ndarray) -> PolygonInteg
     ``Sxy = sum c_i (2 x_i y_i + x_i y_{i+1} + x_{i+1} y_i + 2 x_{i+1} y_{i+1}) / 24``.
     Coordinates are taken relative to each block's first vertex to keep the sums well
     conditioned far from the origin, then the moments are moved to the centroid.
+    ``nxt`` (:func:`next_vertex_index` of ``offsets``) may be passed when it is at hand.
     """
     counts = np.diff(offsets)
     starts = offsets[:-1]
-    nxt = next_vertex_index(offsets)
+    if nxt is None:
+        nxt = next_vertex_index(offsets)
     ref = np.repeat(vertices[starts], counts, axis=0)
     p = vertices - ref
     q = vertices[nxt] - ref

@@ -104,12 +104,15 @@ class Result:
         self.frames_written = 0
 
     # ---------------------------------------------------------------- recording
-    def record(self, frame: Frame, pair_keys, pair_force, pair_normal):
-        self._time.append(frame.time)
-        self._disp.append(frame.displacement.copy())
-        self._rot.append(frame.rotation.copy())
-        self._vel.append(frame.velocity.copy())
-        self._stress.append(frame.stress.copy())
+    def record(self, time, displacement, rotation, velocity, stress, pair_keys, pair_force,
+               pair_normal):
+        """Keep one step: per block (n_blocks, ...) arrays, and the per-pair joint forces
+        of :meth:`dda.Simulation._pair_forces`. The arrays are copied."""
+        self._time.append(float(time))
+        self._disp.append(np.array(displacement))
+        self._rot.append(np.array(rotation))
+        self._vel.append(np.array(velocity))
+        self._stress.append(np.array(stress))
         self._pairs.append((pair_keys, pair_force, pair_normal))
 
     # ---------------------------------------------------------------- access

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda.contact.detection import CandidateContacts
-from dda.contact.kinematics import contact_geometry
+from dda.contact.kinematics import ContactGeometry, contact_geometry
 
 __all__ = ["OPEN", "STICK", "SLIP", "ContactSet", "carry_over"]
 
@@ -65,11 +65,12 @@ class ContactSet:
 def carry_over(
     old: ContactSet, new: CandidateContacts, x: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
     n_blocks: int,
-) -> tuple[ContactSet, np.ndarray]:
+) -> tuple[ContactSet, np.ndarray, ContactGeometry]:
     """Build the contact set of the new detection, with the history of the old one.
 
-    Returns the set and a boolean mask of the contacts that carry no history (new or open):
-    the caller gives those the initial history of their friction law.
+    Returns the set, a boolean mask of the contacts that carry no history (new or open):
+    the caller gives those the initial history of their friction law, and the contacts'
+    geometry at ``x`` (for :class:`dda.contact.ContactElement`).
 
     A pair found again keeps everything. A vertex that was in contact with an edge and is now
     found on the adjacent edge of the same block keeps its state and history, and its shear
@@ -132,4 +133,4 @@ def carry_over(
     t_n[fresh] = 0.0
     t_s[fresh] = 0.0
     contacts = ContactSet(new.vertex, new.edge, new.bj, new.bk, state, xi0, t_n, t_s, history)
-    return contacts, fresh
+    return contacts, fresh, geom

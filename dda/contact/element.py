@@ -145,14 +145,18 @@ class ContactElement:
     nxt, prv : vertex neighbours (see :class:`dda.contact.detection.VertexTopology`)
     normal_penalty, shear_penalty : (m,) penalties of each contact's joint
     laws : LawGroups
+    geometry : ContactGeometry, optional
+        The contacts' geometry at ``x`` when it is at hand (computed otherwise).
     """
 
     def __init__(self, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
-                 shear_penalty, laws: LawGroups):
+                 shear_penalty, laws: LawGroups, geometry: ContactGeometry | None = None):
         with section("contact_element"):
-            self._build(contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws)
+            self._build(contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws,
+                        geometry)
 
-    def _build(self, contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws):
+    def _build(self, contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws,
+               geom):
         self.contacts = contacts
         self.bj = contacts.bj
         self.bk = contacts.bk
@@ -162,7 +166,8 @@ class ContactElement:
             faces = contact_faces(x, contacts.vertex, contacts.edge, nxt, prv)
             laws = LawGroups(laws.groups, faces)
         self.laws = laws
-        geom: ContactGeometry = contact_geometry(x, contacts.vertex, contacts.edge, nxt)
+        if geom is None:
+            geom = contact_geometry(x, contacts.vertex, contacts.edge, nxt)
         self.geometry = geom
         self.gap0 = geom.gap
         self.shear0 = geom.shear_gap(contacts.xi0)
