@@ -41,7 +41,7 @@ class LegacyPullBack(NonlinearSolver):
             return StepSolution(None, None, False, oc.passes, oc.passes, oc.reason)
         state, gap, dgs, history, d = oc.state, oc.gap, oc.dgs, oc.history, oc.d
         closed = state != OPEN
-        t_n = np.where(closed, pn * gap, 0.0)
+        t_n = np.where(closed, np.minimum(pn * gap, 0.0), 0.0)
         stick = state == STICK
         slip = state == SLIP
         new_history = laws.elastic_update(history, dgs, stick)
