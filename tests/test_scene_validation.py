@@ -53,6 +53,23 @@ def test_crossing_without_vertex_inside_is_overlap():
         dda.Simulation(scene, dt=1e-3)
 
 
+@pytest.mark.parametrize("second", [
+    box(0, 0, 1, 1),                            # laid exactly on the first
+    box(0, 0, 0.5, 1),                          # inside it along three shared edges
+    [(0, 0), (1, 0), (1, 1)],                   # half of it, sharing every vertex
+    box(0, 0, 1, 2),                            # covering it, sharing its bottom corners
+])
+def test_coincident_blocks_are_overlaps(second):
+    """No vertex of one lies strictly inside the other and no edges cross properly, yet the
+    blocks overlap: such a scene used to pass and run (found by tests/test_api_fuzz.py)."""
+    scene = dda.Scene()
+    scene.add_block(box(0, 0, 1, 1), ROCK, name="a")
+    scene.add_block(second, ROCK, name="b")
+    scene.set_joint(JOINT)
+    with pytest.raises(ValueError, match=r"'a' and .*'b' overlap"):
+        dda.Simulation(scene, dt=1e-3)
+
+
 def test_touching_blocks_are_fine():
     scene = dda.Scene()
     scene.add_block(box(0, 0, 1, 1), ROCK, name="a")

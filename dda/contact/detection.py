@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda.contact.kinematics import contact_geometry
-from dda.geometry import next_vertex_index
+from dda.geometry import next_vertex_index, polygon_integrals
 
 __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts"]
 
@@ -240,11 +240,33 @@ def narrow_phase(
     )
 
 
+def _strictly_inside(p, kblock, x, offsets, nxt, tol):
+    """Whether each point p (n, 2) lies inside block kblock (n,) farther than tol from its
+    boundary (ray-crossing parity over the block's edges, all points at once)."""
+    pid, edge = _expand_to_edges(np.arange(len(p)), kblock, offsets)
+    q = p[pid]
+    a = x[edge]
+    b = x[nxt[edge]]
+    cond = (a[:, 1] > q[:, 1]) != (b[:, 1] > q[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        xcross = a[:, 0] + (q[:, 1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    crossing = cond & (q[:, 0] < xcross)
+    ab = b - a
+    t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.einsum("ij,ij->i", ab, ab), 0.0, 1.0)
+    dist = np.linalg.norm(q - (a + t[:, None] * ab), axis=1)
+    count = np.bincount(pid, weights=crossing.astype(float), minlength=len(p))
+    mind = np.full(len(p), np.inf)
+    np.minimum.at(mind, pid, dist)
+    return (count % 2 == 1) & (mind > tol)
+
+
 def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9) -> list:
     """Pairs of blocks whose interiors overlap (touching along edges or at corners is fine).
 
-    Two simple polygons overlap when a vertex of one lies strictly inside the other or two of
-    their edges cross properly. Used once, to check a scene before a run.
+    Two simple polygons overlap when a vertex, an edge midpoint or the centroid of one lies
+    strictly inside the other, or two of their edges cross properly. (Vertices and crossings
+    alone miss a block laid exactly on another, or inside it along shared edges.) Used once,
+    to check a scene before a run.
     """
     topo = VertexTopology.from_offsets(offsets)
     boxes = bounding_boxes(x, offsets)
@@ -253,30 +275,24 @@ def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9) -> 
         return []
     size = np.max(boxes[:, 2:] - boxes[:, :2])
     tol = rel_tol * size
-    vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
-    vertex, edge = _expand_to_edges(vertex, kblock, offsets)
-    p = x[vertex]
-    a = x[edge]
-    b = x[topo.nxt[edge]]
-    # strictly inside: winding by ray crossing, and farther than tol from every edge
-    cond = (a[:, 1] > p[:, 1]) != (b[:, 1] > p[:, 1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xcross = a[:, 0] + (p[:, 1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
-    crossing = cond & (p[:, 0] < xcross)
-    ab = b - a
-    t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.einsum("ij,ij->i", ab, ab), 0.0, 1.0)
-    dist = np.linalg.norm(p - (a + t[:, None] * ab), axis=1)
-    key = vertex * len(boxes) + topo.block[edge]
-    uniq, inv = np.unique(key, return_inverse=True)
-    count = np.bincount(inv, weights=crossing.astype(float))
-    mind = np.full(len(uniq), np.inf)
-    np.minimum.at(mind, inv, dist)
-    inside = (count % 2 == 1) & (mind > tol)
     bad = set()
-    for k in uniq[inside]:
-        v, blk = divmod(int(k), len(boxes))
-        pair = (min(int(topo.block[v]), blk), max(int(topo.block[v]), blk))
-        bad.add(pair)
+
+    def mark(block_a, block_b):
+        for a, b in zip(block_a.tolist(), block_b.tolist(), strict=True):
+            bad.add((min(a, b), max(a, b)))
+
+    # vertices and edge midpoints of j strictly inside k
+    vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
+    for points in (x[vertex], 0.5 * (x[vertex] + x[topo.nxt[vertex]])):
+        inside = _strictly_inside(points, kblock, x, offsets, topo.nxt, tol)
+        mark(topo.block[vertex[inside]], kblock[inside])
+    # a block's centroid (when it lies inside the block) strictly inside the other block
+    centroid = polygon_integrals(x, offsets, topo.nxt).centroid
+    j = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    k = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    own = _strictly_inside(centroid[j], j, x, offsets, topo.nxt, tol)
+    inside = own & _strictly_inside(centroid[j], k, x, offsets, topo.nxt, tol)
+    mark(j[inside], k[inside])
     # proper edge crossings between the two blocks of a pair
     # every edge of one block against every edge of the other (no box filter: an edge may
     # cross a box whose corners all lie outside it)
