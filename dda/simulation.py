@@ -150,6 +150,11 @@ class Simulation:
         ints = geometry.polygon_integrals(x0, offsets)
         self.centroid_initial = ints.centroid.copy()
         self.size = np.sqrt(ints.area)  # a length scale per block
+        # a thickness per block (2 area / perimeter: half the side of a square, about the
+        # thickness of a slab); no real contact penetrates half the thinner block's
+        edges = x0[self.topo.nxt] - x0
+        perimeter = np.add.reduceat(np.hypot(edges[:, 0], edges[:, 1]), offsets[:-1])
+        self.thickness = 2.0 * ints.area / perimeter
         self.density = np.array([b.material.density for b in blocks])
         self.elasticity = np.stack([b.material.elasticity() for b in blocks])
         young = np.array([b.material.young for b in blocks])
@@ -317,8 +322,12 @@ class Simulation:
         d_known[self.free] = 0.0
 
         d0 = self._search_distance(dt, centroid, d_known[~self.free, :2])
-        pen_limit = max(2.0 * d0, 1e-3 * float(np.min(self.size)),
-                        2.0 * self._deepest_penetration() + d0)
+        # a vertex found this deep inside a block is on the wrong side of a far edge, not in
+        # contact with it, however wide the search (a thin bar hitting a post at 13.5 m/s was
+        # thrown off at 400 m/s by a 0.5 m "penetration" before this cap)
+        cap = 0.5 * float(np.min(self.thickness))
+        pen_limit = max(min(2.0 * d0, cap), 1e-3 * float(np.min(self.size)),
+                        2.0 * self._deepest_penetration() + min(d0, cap))
         with section("detection"):
             cand = narrow_phase(st.x, self.topo, d0, pen_limit)
             contacts, fresh, geom = carry_over(st.contacts, cand, st.x, self.topo.nxt,
