@@ -7,9 +7,14 @@ again with half the step size. All work inside a step is on arrays over blocks a
 
 from __future__ import annotations
 
+import os
+import pickle
+import signal
 import sys
+import threading
 import time as _time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -36,6 +41,8 @@ GROW_AFTER = 8
 SEARCH_FACTOR = 2.5
 # times a step is tried again with a wider search before its dt is cut instead
 MAX_WIDENINGS = 2
+# layout of the checkpoint files written by Simulation.run
+CHECKPOINT_VERSION = 1
 
 
 class SimulationError(RuntimeError):
@@ -236,6 +243,10 @@ class Simulation:
         self._search_hint = 0.0
         self._dt_now = self.dt
         self._good_steps = 0
+        self._resume_end = None  # the end of an interrupted run (set by resume)
+        self._last_writer = None  # the writer of the last frame written, and its time
+        self._last_written_time = None
+        self._resume_checkpoint = None
 
     # ------------------------------------------------------------------ helpers
     def _joint_index(self, bj, bk):
@@ -402,18 +413,28 @@ class Simulation:
             s.history.restore(snap)
 
     # ------------------------------------------------------------------ run
-    def run(self, duration: float, output=None, progress: bool | None = None) -> Result:
+    def run(self, duration: float | None = None, output=None, progress: bool | None = None,
+            checkpoint=None, checkpoint_every: int = 100) -> Result:
         """Run the simulation for ``duration`` seconds from where it stands.
 
         Parameters
         ----------
-        duration : float
-            Simulated time to add (s).
+        duration : float, optional
+            Simulated time to add (s). Only a simulation from :meth:`resume` may leave it out:
+            it then runs to the end of the run that was interrupted.
         output : writer, optional
             Overrides the writer given to the constructor for this run.
         progress : bool, optional
             Show a progress bar on stderr; by default on for runs of more than 2,000 steps
             when stderr is a terminal.
+        checkpoint : str or Path, optional
+            File to keep the run's state in, written (atomically) every ``checkpoint_every``
+            steps, when the run is interrupted (Ctrl-C, SIGTERM) and at its end;
+            :meth:`resume` goes on from it. The scene must be picklable: its callables
+            module-level functions, not lambdas. A resumed simulation keeps writing to the
+            file it came from unless given another.
+        checkpoint_every : int
+            Steps between checkpoints.
 
         Returns
         -------
@@ -425,12 +446,33 @@ class Simulation:
         SimulationError
             When a step cannot be made to converge even with a much smaller dt; its
             ``result`` holds the steps done before (and the writer has written them).
+        KeyboardInterrupt
+            On Ctrl-C or SIGTERM, after the steps done are written and checkpointed.
         """
+        if duration is None:
+            if self._resume_end is None:
+                raise ValueError("Simulation.run: give the duration (only a simulation from "
+                                 "Simulation.resume may leave it out)")
+            duration = self._resume_end - self.state.time
+            if duration <= 1e-12 * max(1.0, self._resume_end):
+                raise ValueError(f"Simulation.run: the resumed run already ended at t = "
+                                 f"{self._resume_end:g} s; give a duration to go on")
         duration = finite_number("duration", duration, positive=True, where="run")
+        if checkpoint is None and self._resume_checkpoint is not None:
+            checkpoint, checkpoint_every = self._resume_checkpoint
+        if checkpoint is not None:
+            checkpoint = Path(checkpoint)
+            if int(checkpoint_every) < 1:
+                raise ValueError("Simulation.run: checkpoint_every must be at least 1, got "
+                                 f"{checkpoint_every!r}")
+            checkpoint_every = int(checkpoint_every)
+            checkpoint.parent.mkdir(parents=True, exist_ok=True)
         t_end = self.state.time + duration
         for s in self.shakes:
             s.history.check_covers(t_end)
         writer = output if output is not None else self.output
+        if checkpoint is not None:
+            self._checkpoint_payload(writer, t_end, checkpoint, checkpoint_every)  # picklable?
         n_steps = int(np.ceil(duration / self.dt - 1e-9))
         if progress is None:
             progress = n_steps > 2000 and sys.stderr.isatty()
@@ -438,6 +480,7 @@ class Simulation:
         result = Result(self.scene, [b.name for b in self.scene.blocks])
         self._record(result, writer)
         since_record = 0
+        previous_term = _raise_on_sigterm()
         try:
             while self.state.time < t_end - 1e-12 * max(1.0, t_end):
                 self._advance(result, t_end)
@@ -446,17 +489,79 @@ class Simulation:
                 if since_record >= self.record_every or last:
                     self._record(result, writer)
                     since_record = 0
+                if checkpoint is not None and (self._steps_done % checkpoint_every == 0
+                                               or last):
+                    self.save_checkpoint(checkpoint, writer, t_end, checkpoint_every)
                 if bar:
                     bar.update(self.state.time)
         except SimulationError as exc:
             exc.result = result
             raise
+        except KeyboardInterrupt:
+            if checkpoint is not None:  # the committed state is whole: keep it
+                self.save_checkpoint(checkpoint, writer, t_end, checkpoint_every)
+            raise
         finally:
+            if previous_term is not None:
+                signal.signal(signal.SIGTERM, previous_term[0])
             if bar:
                 bar.close()
             if writer is not None:
                 writer.close()
         return result
+
+    # ------------------------------------------------------------------ checkpoints
+    def _checkpoint_payload(self, writer, t_end, path, every) -> bytes:
+        data = {"version": CHECKPOINT_VERSION, "simulation": self, "writer": writer,
+                "end": t_end, "checkpoint": (str(path), every)}
+        try:
+            return pickle.dumps(data, protocol=pickle.HIGHEST_PROTOCOL)
+        except Exception as exc:  # pickle raises several types for what it cannot save
+            raise ValueError(
+                f"Simulation.run: checkpoint cannot save this simulation ({exc}); give the "
+                "scene module-level functions instead of lambdas or local functions (for "
+                "shaking, loads and prescribed motions), or a recorded accelerogram"
+            ) from None
+
+    def save_checkpoint(self, path, writer=None, end: float | None = None,
+                        every: int = 100) -> None:
+        """Write the committed state, the step control and the writer to ``path``.
+
+        The file is written to a temporary name first and then renamed, so an interruption
+        never leaves a half-written checkpoint. ``end`` is the time the run was to reach.
+        """
+        path = Path(path)
+        payload = self._checkpoint_payload(writer, self.state.time if end is None else end,
+                                           path, every)
+        tmp = path.with_name(path.name + ".tmp")
+        tmp.write_bytes(payload)
+        os.replace(tmp, path)
+
+    @classmethod
+    def resume(cls, path) -> Simulation:
+        """The simulation kept in a checkpoint file of :meth:`run`, ready to go on.
+
+        ``Simulation.resume(path).run()`` finishes the interrupted run: same steps, same
+        numbers as a run that was never interrupted, and the same writer goes on numbering its
+        files where the checkpoint left it. Only resume files you wrote yourself: a
+        checkpoint is a pickle.
+        """
+        path = Path(path)
+        if not path.is_file():
+            raise ValueError(f"Simulation.resume: no checkpoint file {path}")
+        try:
+            data = pickle.loads(path.read_bytes())
+        except Exception as exc:
+            raise ValueError(f"Simulation.resume: {path} is not a readable checkpoint "
+                             f"({type(exc).__name__}: {exc})") from None
+        if not isinstance(data, dict) or data.get("version") != CHECKPOINT_VERSION:
+            raise ValueError(f"Simulation.resume: {path} is not a checkpoint of this version "
+                             f"of dda (layout {CHECKPOINT_VERSION})")
+        sim = data["simulation"]
+        sim.output = data["writer"]
+        sim._resume_end = data["end"]
+        sim._resume_checkpoint = data["checkpoint"]
+        return sim
 
     def _advance(self, result, t_end):
         """Take one step, cutting dt as often as needed; commit it and log its stats."""
@@ -470,8 +575,12 @@ class Simulation:
             if remaining - dt < 1e-6 * dt:
                 dt = remaining  # no sliver of a step left over at the end
             snaps = self._snapshots()
-            with profile.active():
-                new, sol = self._try_step(dt)
+            try:
+                with profile.active():
+                    new, sol = self._try_step(dt)
+            except BaseException:  # an interrupt mid-step: leave the committed state whole
+                self._restore(snaps)
+                raise
             if new is not None:
                 break
             self._restore(snaps)
@@ -567,9 +676,30 @@ class Simulation:
         # the result needs block centroids only; a full Frame is built when a writer asks
         result.record(st.time, st.centroid - self.centroid_initial, st.rotation, st.velocity,
                       st.stress, keys, f, n)
-        if writer is not None:
+        if writer is None:
+            return
+        # a run that goes on, or resumes, starts at the writer's last frame: not twice
+        last = getattr(writer, "last_time", None)
+        if last is None and writer is self._last_writer:
+            last = self._last_written_time
+        if last != st.time:
             writer.write(self.frame())
             result.frames_written += 1
+            self._last_writer, self._last_written_time = writer, st.time
+
+
+def _raise_on_sigterm():
+    """Turn SIGTERM into KeyboardInterrupt for the run (main thread only).
+
+    Returns ``(old handler,)`` to restore, or None off the main thread.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt(f"signal {signum}")
+
+    return (signal.signal(signal.SIGTERM, interrupt),)
 
 
 class _Progress:

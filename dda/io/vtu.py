@@ -54,7 +54,10 @@ class VTUWriter:
         self.every = int(every)
         self.prefix.parent.mkdir(parents=True, exist_ok=True)
         self._entries: list[tuple[float, str]] = []
+        self._n = 0  # entries that count: _entries[:_n]
         self._seen = 0
+        #: time of the last frame given to :meth:`write` (written or skipped by ``every``)
+        self.last_time: float | None = None
 
     @property
     def pvd_path(self) -> Path:
@@ -63,21 +66,28 @@ class VTUWriter:
     @property
     def files(self) -> list[Path]:
         """The .vtu files written so far."""
-        return [self.prefix.parent / name for _, name in self._entries]
+        return [self.prefix.parent / name for _, name in self._entries[:self._n]]
 
     def write(self, frame: Frame) -> None:
-        """Write one frame (called by the simulation at every recorded step)."""
-        self._seen += 1
-        if (self._seen - 1) % self.every:
-            return
-        name = f"{self.prefix.name}_{len(self._entries):05d}.vtu"
-        mesh = frame_to_mesh(frame)
-        path = self.prefix.parent / name
-        tmp = path.with_name(path.name + ".tmp.vtu")
-        meshio.write(tmp, mesh, file_format="vtu")
-        os.replace(tmp, path)
-        self._entries.append((frame.time, name))
-        if len(self._entries) % 50 == 1:
+        """Write one frame (called by the simulation at every recorded step).
+
+        The file is written under a temporary name and renamed, and the writer's count is
+        updated only after that, in one statement: a run interrupted anywhere in here leaves
+        either no new file and the old count, or the new file and the new count
+        (``last_time`` tells a resumed run which frame the writer has).
+        """
+        n = self._n
+        if self._seen % self.every == 0:
+            name = f"{self.prefix.name}_{n:05d}.vtu"
+            path = self.prefix.parent / name
+            tmp = path.with_name(path.name + ".tmp.vtu")
+            meshio.write(tmp, frame_to_mesh(frame), file_format="vtu")
+            os.replace(tmp, path)
+            del self._entries[n:]  # an entry left by an interrupted write
+            self._entries.append((frame.time, name))
+            n += 1
+        self._n, self._seen, self.last_time = n, self._seen + 1, frame.time
+        if self._seen % (50 * self.every) == 1:
             self._write_pvd()
 
     def close(self) -> None:
@@ -88,7 +98,7 @@ class VTUWriter:
         lines = ['<?xml version="1.0"?>',
                  '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
                  "  <Collection>"]
-        for t, name in self._entries:
+        for t, name in self._entries[:self._n]:
             lines.append(
                 f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(name)}/>'
             )

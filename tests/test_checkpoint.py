@@ -1,0 +1,113 @@
+"""Checkpoint and resume: an interrupted run keeps what it wrote and goes on with the same
+numbers as a run that was never interrupted."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import meshio
+import numpy as np
+import pytest
+
+import dda
+from tests import checkpoint_scene as cs
+
+ROOT = Path(__file__).resolve().parents[1]
+STEPS = round(cs.DURATION / cs.DT)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted():
+    sim = cs.simulation()
+    result = sim.run(cs.DURATION)
+    return sim, result
+
+
+def assert_same_state(a, b):
+    assert a.state.time == pytest.approx(b.state.time, rel=1e-14)
+    for name in ("x", "velocity", "stress", "rotation"):
+        np.testing.assert_array_equal(getattr(a.state, name), getattr(b.state, name), name)
+    np.testing.assert_array_equal(a.state.contacts.t_n, b.state.contacts.t_n)
+    np.testing.assert_array_equal(a.state.contacts.t_s, b.state.contacts.t_s)
+
+
+def test_interrupted_run_resumes_with_the_same_numbers(tmp_path, uninterrupted):
+    ref, ref_result = uninterrupted
+    sim = cs.simulation(cs.InterruptOnce(at=123))
+    path = tmp_path / "run.ckpt"
+    with pytest.raises(KeyboardInterrupt):
+        sim.run(cs.DURATION, checkpoint=path, checkpoint_every=25)
+    stopped = sim.state.time
+    assert 0.2 < stopped < 0.3  # frame 123 is the state after step 122
+    resumed = dda.Simulation.resume(path)
+    assert resumed.state.time == stopped  # the interruption saved the last committed step
+    result = resumed.run()
+    assert result.time[-1] == pytest.approx(cs.DURATION)
+    assert_same_state(resumed, ref)
+    # the resumed run's history is the tail of the uninterrupted one
+    tail = ref_result.displacement("block")[-len(result.time):]
+    np.testing.assert_array_equal(result.displacement("block"), tail)
+    with pytest.raises(ValueError, match="already ended"):
+        dda.Simulation.resume(path).run()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_killed_process_keeps_its_files_and_resumes(tmp_path, uninterrupted, sig):
+    """A subprocess is signalled mid-run: every VTU file it wrote is whole, the index lists
+    them, and resuming from its checkpoint finishes the run with the uninterrupted numbers."""
+    ref, _ = uninterrupted
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen(
+        [sys.executable, "-c", "from tests.checkpoint_scene import main; main()",
+         str(tmp_path)], cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True)
+    written = 0
+    for line in proc.stdout:
+        written = int(line.split()[1])
+        if written >= 60:
+            proc.send_signal(sig)
+            break
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode != 0, "the run was not interrupted"
+    assert "KeyboardInterrupt" in err
+    files = sorted(tmp_path.glob("case_*.vtu"))
+    assert len(files) >= 60
+    assert not list(tmp_path.glob("*.tmp*"))  # nothing half-written
+    for f in files:
+        assert len(meshio.read(f).points) > 0
+    pvd = (tmp_path / "case.pvd").read_text()
+    assert pvd.count("<DataSet") == len(files)
+
+    resumed = dda.Simulation.resume(tmp_path / "run.ckpt")
+    assert resumed.state.time < cs.DURATION
+    resumed.run()
+    assert_same_state(resumed, ref)
+    files = sorted(tmp_path.glob("case_*.vtu"))
+    assert len(files) == STEPS + 1  # the start and every step, each once
+    assert (tmp_path / "case.pvd").read_text().count("<DataSet") == STEPS + 1
+
+
+def test_checkpoint_needs_a_picklable_scene(tmp_path):
+    scene = cs.build_scene()
+    scene.shake(scene.block("block"), acceleration=lambda t: (0.0, 0.0))  # a lambda
+    sim = dda.Simulation(scene, dt=cs.DT)
+    with pytest.raises(ValueError, match="module-level functions"):
+        sim.run(0.01, checkpoint=tmp_path / "x.ckpt")
+    assert not (tmp_path / "x.ckpt").exists()
+
+
+def test_resume_and_run_errors(tmp_path):
+    with pytest.raises(ValueError, match="no checkpoint file"):
+        dda.Simulation.resume(tmp_path / "missing.ckpt")
+    bad = tmp_path / "bad.ckpt"
+    bad.write_bytes(b"not a pickle")
+    with pytest.raises(ValueError, match="not a readable checkpoint"):
+        dda.Simulation.resume(bad)
+    with pytest.raises(ValueError, match="give the duration"):
+        cs.simulation().run()
+    with pytest.raises(ValueError, match="checkpoint_every"):
+        cs.simulation().run(0.01, checkpoint=tmp_path / "c.ckpt", checkpoint_every=0)
