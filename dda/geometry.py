@@ -31,6 +31,8 @@ __all__ = [
     "vertex_displacements",
     "signed_areas",
     "self_intersections",
+    "cut_blocks",
+    "JointSet",
 ]
 
 
@@ -243,3 +245,7 @@ def _point_on_segment(p, a, b, tol):
     t = np.einsum("ij,ij->i", ap, ab) / length2
     foot = a + np.clip(t, 0.0, 1.0)[:, None] * ab
     return np.linalg.norm(p - foot, axis=1) <= tol
+
+
+# block cutting lives in its own module (it needs shapely); it is part of dda.geometry's API
+from dda.cutting import JointSet, cut_blocks  # noqa: E402

@@ -1,0 +1,94 @@
+"""A jointed rock slope cut from two joint sets, shaken: several hundred blocks.
+
+The rock mass (a 20 m high slope face at 59 degrees, 40 m deep at its base) is cut by
+bedding dipping 25 degrees out of the face, 1 m apart, and cross joints dipping 70 degrees
+into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``); slivers
+thinner than 10 cm are dropped. It rests on a fixed base that shakes horizontally at 2 Hz,
+0.3 g, after 0.2 s of settling under gravity.
+
+Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` and prints the blocks, how far the blocks of
+the face moved, and the cost profile.
+
+Run:  python examples/jointed_slope.py [--out DIR] [--duration S] [--dt S]
+                                       [--solver legacy|newton]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.geometry import JointSet, cut_blocks
+from dda.materials import LinearElastic
+
+ROCK = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
+JOINT = JointMaterial(normal_penalty=5e10, shear_penalty=5e10, friction=CoulombSingle(phi=35.0))
+MASS = [(20.0, 0.0), (60.0, 0.0), (60.0, 20.0), (32.0, 20.0)]  # toe, base, back, crest
+SETS = [JointSet(dip=-25.0, spacing=1.0, offset=0.3),
+        JointSet(dip=70.0, spacing=1.6, persistence=0.8, trace_length=5.0)]
+SETTLE = 0.2
+
+
+def shaking(t):
+    """Base acceleration: nothing while the slope settles, then 0.3 g at 2 Hz."""
+    if t < SETTLE:
+        return (0.0, 0.0)
+    return (0.3 * 9.81 * np.sin(4.0 * np.pi * (t - SETTLE)), 0.0)
+
+
+def build_scene(min_size: float = 0.10, seed: int = 0):
+    """The cut slope on a shaken base: (scene, base, list of block handles)."""
+    scene = dda.Scene(gravity=9.81)
+    base = scene.add_block([(0, -3), (64, -3), (64, 0), (0, 0)], ROCK, fixed=True, name="base")
+    blocks = [scene.add_block(b, ROCK, name=f"rock{i}")
+              for i, b in enumerate(cut_blocks(MASS, SETS, min_size=min_size, seed=seed))]
+    scene.set_joint(JOINT)
+    scene.shake(base, acceleration=shaking)
+    return scene, base, blocks
+
+
+def face_blocks(scene, blocks, depth: float = 2.0):
+    """The blocks within ``depth`` of the slope face (the ones that can fall)."""
+    (x0, y0), (x1, y1) = MASS[0], MASS[3]
+    n = np.array([y1 - y0, -(x1 - x0)]) / np.hypot(x1 - x0, y1 - y0)  # into the rock
+    x, offsets = scene.vertex_arrays()
+    out = []
+    for b in blocks:
+        corners = x[offsets[b.index]:offsets[b.index + 1]]
+        if np.min((corners - [x0, y0]) @ n) < depth:
+            out.append(b)
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--out", default="out/jointed_slope", help="output folder")
+    ap.add_argument("--duration", type=float, default=1.0, help="simulated time, s")
+    ap.add_argument("--dt", type=float, default=2e-3, help="time step, s")
+    ap.add_argument("--solver", choices=["legacy", "newton"], default="legacy")
+    args = ap.parse_args(argv)
+    out = Path(args.out)
+    scene, base, blocks = build_scene()
+    face = face_blocks(scene, blocks)
+    print(f"{len(blocks)} blocks cut from the slope ({len(face)} on its face)")
+    solver = dda.solvers.LegacyPullBack() if args.solver == "legacy" else \
+        dda.solvers.NewtonRaphson()
+    writer = dda.io.VTUWriter(out / "slope", every=max(1, int(round(0.05 / args.dt))))
+    sim = dda.Simulation(scene, dt=args.dt, solver=solver, max_open_close=30)
+    result = sim.run(args.duration, output=writer, progress=sys.stderr.isatty())
+    base_u = result.displacement(base)[-1]
+    moved = np.array([np.hypot(*(result.displacement(b)[-1] - base_u)) for b in face])
+    print(f"after {args.duration:g} s the face blocks moved {1e3 * np.median(moved):.2f} mm "
+          f"(median) and {1e3 * moved.max():.2f} mm (most) against the base")
+    print(f"wrote {len(writer.files)} VTU files and {writer.pvd_path}")
+    print(result.profile())
+    return result, blocks, moved
+
+
+if __name__ == "__main__":
+    main()
