@@ -3,8 +3,13 @@
 The rock mass (a 20 m high slope face at 59 degrees, 40 m deep at its base) is cut by
 bedding dipping 25 degrees out of the face, 1 m apart, and cross joints dipping 70 degrees
 into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``); slivers
-thinner than 10 cm are dropped. It rests on a fixed base that shakes horizontally at 2 Hz,
-0.3 g, after 0.2 s of settling under gravity.
+thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
+shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
+
+Not yet trustworthy: with these defaults (0.3 s, about 5.5 minutes, 2,764 steps with 287 dt
+cuts) the face blocks end 0.49 m (median) and up to 3.6 m from where they started relative to
+the base, faster than 0.3 g at 2 Hz can explain; a 26-block version of the same cut stays
+below 0.5 m/s. Under investigation; do not read the motions as results yet.
 
 Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` and prints the blocks, how far the blocks of
 the face moved, and the cost profile.
@@ -31,7 +36,7 @@ JOINT = JointMaterial(normal_penalty=5e10, shear_penalty=5e10, friction=CoulombS
 MASS = [(20.0, 0.0), (60.0, 0.0), (60.0, 20.0), (32.0, 20.0)]  # toe, base, back, crest
 SETS = [JointSet(dip=-25.0, spacing=1.0, offset=0.3),
         JointSet(dip=70.0, spacing=1.6, persistence=0.8, trace_length=5.0)]
-SETTLE = 0.2
+SETTLE = 0.05
 
 
 def shaking(t):
@@ -42,13 +47,17 @@ def shaking(t):
 
 
 def build_scene(min_size: float = 0.10, seed: int = 0):
-    """The cut slope on a shaken base: (scene, base, list of block handles)."""
+    """The cut slope on a shaken base with a back wall: (scene, base, the blocks)."""
     scene = dda.Scene(gravity=9.81)
     base = scene.add_block([(0, -3), (64, -3), (64, 0), (0, 0)], ROCK, fixed=True, name="base")
+    # the rock mass goes on behind the section: a wall on the base holds its back face
+    back = scene.add_block([(60, 0), (64, 0), (64, 22), (60, 22)], ROCK, fixed=True,
+                           name="back")
     blocks = [scene.add_block(b, ROCK, name=f"rock{i}")
               for i, b in enumerate(cut_blocks(MASS, SETS, min_size=min_size, seed=seed))]
     scene.set_joint(JOINT)
     scene.shake(base, acceleration=shaking)
+    scene.shake(back, acceleration=shaking)
     return scene, base, blocks
 
 
@@ -68,7 +77,7 @@ def face_blocks(scene, blocks, depth: float = 2.0):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out/jointed_slope", help="output folder")
-    ap.add_argument("--duration", type=float, default=1.0, help="simulated time, s")
+    ap.add_argument("--duration", type=float, default=0.3, help="simulated time, s")
     ap.add_argument("--dt", type=float, default=2e-3, help="time step, s")
     ap.add_argument("--solver", choices=["legacy", "newton"], default="legacy")
     args = ap.parse_args(argv)
