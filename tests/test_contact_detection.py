@@ -11,6 +11,7 @@ from dda.contact.detection import (
     find_overlaps,
     narrow_phase,
 )
+from dda.contact.kinematics import contact_geometry
 from tests.conftest import box
 
 
@@ -86,6 +87,22 @@ def test_vertex_to_vertex_keeps_one_pair():
     high = [(0.0, 0.0005), (s, s + 0.0005), (0.0, 2 * s + 0.0005), (-s, s + 0.0005)]
     x, c = contacts_of(low, high)
     assert len(c) == 1
+
+
+def test_corner_past_a_four_block_corner_is_not_taken_as_deep():
+    # where two joints cross, the upper right block's corner has slid 0.1 mm left along the
+    # bedding past the lower left block's corner: 1 micron into the bedding, 0.1 mm behind
+    # the line of the cross joint. The contact is on the bedding (a 0.1 mm "penetration"
+    # of the cross joint threw face blocks of a cut slope out at metres per second)
+    eps, delta = 1e-4, 1e-6
+    lower = box(0, 0, 1, 1)
+    upper = [(1 - eps, 1 - delta), (2, 1 - delta), (2, 2), (1.3, 2)]
+    x, c = contacts_of(lower, upper)
+    frame = contact_geometry(x, c.vertex, c.edge, VertexTopology.from_offsets(
+        np.array([0, 4, 8])).nxt)
+    assert len(c) >= 1
+    np.testing.assert_allclose(frame.gap, -delta, atol=1e-12)
+    np.testing.assert_allclose(np.abs(frame.normal[:, 1]), 1.0)
 
 
 def test_find_overlaps():

@@ -18,9 +18,11 @@ A vertex-edge pair is a contact candidate when
 3. the gap lies in ``[-penetration_limit, search_distance]``;
 4. the vertex is locally the first point of its block to cross the edge's line: both of its
    edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG``.
-Of several edges of one block that pass for the same vertex, one whose foot lies on the edge
-is preferred, then the one whose outward normal is most opposed to the vertex's outward
-bisector. A vertex-vertex case (the foot at the
+Of several edges of one block that pass for the same vertex, the one with the largest gap is
+preferred (the least deep: at a corner where four blocks meet, a vertex sliding along one
+joint past the corner must not be taken as deep behind the other joint's line), then one whose
+foot lies on the edge, then the one whose outward normal is most opposed to the vertex's
+outward bisector. A vertex-vertex case (the foot at the
 end of the edge, the two vertices within the search distance) shows up as two mirrored pairs,
 P on an edge at Q and Q on an edge at P; only one is kept: the one whose foot lies on its
 edge, else the better opposed one.
@@ -39,6 +41,8 @@ __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "Ca
 
 ENTRANCE_TOLERANCE_DEG = 20.0
 _XI_TOL = 1e-9
+# gaps to two edges within this fraction of the edge length are a tie (round-off)
+_GAP_TIE = 1e-9
 
 
 @dataclass(frozen=True)
@@ -123,6 +127,7 @@ class CandidateContacts:
     edge: np.ndarray
     bj: np.ndarray
     bk: np.ndarray
+    pairs: int = 0  # block pairs the broad phase handed to the narrow phase
 
     def __len__(self):
         return len(self.vertex)
@@ -177,7 +182,7 @@ def narrow_phase(
     margin = max(search_distance, penetration_limit)
     if pairs is None:
         pairs = broad_phase(boxes, margin)
-    empty = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
+    empty = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)), len(pairs))
     if len(pairs) == 0:
         return empty
     vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, margin)
@@ -203,14 +208,20 @@ def narrow_phase(
         arm_len = np.hypot(arm[:, 0], arm[:, 1])
         ok &= np.einsum("ij,ij->i", arm, normal) >= -sin_tol * arm_len
     vertex, edge, xi, normal, p1 = vertex[ok], edge[ok], xi[ok], normal[ok], p1[ok]
-    on_edge = on_edge[ok]
+    on_edge, gap, length = on_edge[ok], gap[ok], frame.length[ok]
     if len(vertex) == 0:
         return empty
     kblock = topo.block[edge]
     score = -np.einsum("ij,ij->i", normal, bisector[vertex])
 
-    # one edge per (vertex, block): the best opposed
-    order = np.lexsort((-score, ~on_edge, kblock, vertex))
+    # one edge per (vertex, block): the one the vertex is least deep behind (the signed
+    # distance to a convex block is the largest of the gaps to its edges' lines), then one
+    # whose foot is on it, then the best opposed
+    group = np.unique(vertex * len(topo.offsets) + kblock, return_inverse=True)[1]
+    best = np.full(group.max() + 1, -np.inf)
+    np.maximum.at(best, group, gap)
+    least_deep = gap >= best[group] - _GAP_TIE * length
+    order = np.lexsort((-score, ~on_edge, ~least_deep, kblock, vertex))
     vertex, edge, xi, kblock, score, p1, on_edge = (
         a[order] for a in (vertex, edge, xi, kblock, score, p1, on_edge)
     )
@@ -236,7 +247,7 @@ def narrow_phase(
         drop[idx[dup]] = True
         vertex, edge, kblock = vertex[~drop], edge[~drop], kblock[~drop]
     return CandidateContacts(
-        vertex=vertex, edge=edge, bj=topo.block[vertex], bk=kblock
+        vertex=vertex, edge=edge, bj=topo.block[vertex], bk=kblock, pairs=len(pairs)
     )
 
 
