@@ -38,14 +38,18 @@ class StepStats:
     Fields: time, dt, iterations (legacy: linear solves; Newton: iterations after OPEN-CLOSE),
     open_close_passes, contacts (vertex-edge pairs tracked), closed (closed contacts), retries
     (failed tries before the step went through), wall_time (s), solves (linear solves, retries
-    included) and the seconds spent in each part of the step (retries included):
+    included), unknowns (size of the step's linear system: 6 per free block, 3 per rigid
+    one; fixed and shaken blocks have none), pairs (block pairs whose bounding boxes came
+    within the contact search distance: the only pairs the narrow phase looks at) and the
+    seconds spent in each part of the step (retries included):
     detection_time, contact_element_time, return_map_time, assembly_time, solve_time (see
     :mod:`dda.profiling`). ``residual_norms`` holds the Newton out-of-balance norms of every
     step and ``cuts`` every dt cut as (time, dt, reason).
     """
 
     FIELDS = ("time", "dt", "iterations", "open_close_passes", "contacts", "closed", "retries",
-              "wall_time", "solves") + tuple(f"{name}_time" for name in SECTIONS)
+              "wall_time", "solves", "unknowns", "pairs")
+    FIELDS += tuple(f"{name}_time" for name in SECTIONS)
 
     def __init__(self):
         self._rows = {k: [] for k in self.FIELDS}

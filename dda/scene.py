@@ -34,6 +34,7 @@ class _BlockInput:
     fixed: bool
     velocity: np.ndarray
     angular_velocity: float
+    rigid: bool = False
 
 
 @dataclass
@@ -126,6 +127,7 @@ class Scene:
         name: str | None = None,
         velocity=(0.0, 0.0),
         angular_velocity: float = 0.0,
+        rigid: bool = False,
     ) -> Block:
         """Add a polygonal block.
 
@@ -143,6 +145,10 @@ class Scene:
             Initial velocity of the block's centroid (m/s).
         angular_velocity : float
             Initial angular velocity about the centroid (rad/s, counter-clockwise positive).
+        rigid : bool
+            A rigid block moves with 3 unknowns (translation and rotation) instead of 6: it
+            does not strain and carries no stress. Worth it for blocks much stiffer than
+            their joints, where the strain is tiny and costs unknowns.
         """
         index = len(self._blocks)
         name = f"block{index}" if name is None else str(name)
@@ -185,7 +191,9 @@ class Scene:
             raise TypeError(f"{where}: material must be a LinearElastic, got {material!r}")
         vel = finite_vector("velocity", velocity, where=where)
         omega = finite_number("angular_velocity", angular_velocity, where=where)
-        self._blocks.append(_BlockInput(v, material, bool(fixed), vel, omega))
+        if not isinstance(rigid, (bool, np.bool_)):
+            raise TypeError(f"{where}: rigid must be True or False, got {rigid!r}")
+        self._blocks.append(_BlockInput(v, material, bool(fixed), vel, omega, bool(rigid)))
         handle = Block(index, name)
         self._handles.append(handle)
         return handle

@@ -21,7 +21,7 @@ import numpy as np
 from dda import geometry
 from dda._checks import finite_number
 from dda.contact.contacts import OPEN, ContactSet, carry_over
-from dda.contact.detection import VertexTopology, narrow_phase
+from dda.contact.detection import CandidateContacts, VertexTopology, narrow_phase
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.kinematics import contact_geometry
 from dda.profiling import StepProfile, section
@@ -166,8 +166,10 @@ class Simulation:
         self.elasticity = np.stack([b.material.elasticity() for b in blocks])
         young = np.array([b.material.young for b in blocks])
 
-        # blocks whose motion is known carry no unknowns
+        # blocks whose motion is known carry no unknowns; rigid ones carry no strain unknowns
         self.free = np.array([not b.fixed for b in blocks])
+        rigid = np.array([b.rigid for b in blocks], dtype=bool)
+        self.rigid = rigid if rigid.any() else None
         self.shakes = list(sc._shakes)
         full = [m for m in sc._motions if not m.springs]
         self.partial = [m for m in sc._motions if m.springs]
@@ -324,7 +326,8 @@ class Simulation:
         ints = geometry.polygon_integrals(st.x, self.offsets, self.topo.nxt)
         centroid = ints.centroid
         k, m, f = self._block_forces(t1, ints, centroid)
-        v_eff = st.velocity * self.velocity_carry
+        # a static analysis carries no velocity: no inertial force term
+        v_eff = st.velocity * self.velocity_carry if self.velocity_carry else None
         k_eff, f_eff = effective_system(k, m, f, v_eff, dt)
 
         known_u, known_v = self._known_motion(t1)
@@ -339,8 +342,13 @@ class Simulation:
         cap = 0.5 * float(np.min(self.thickness))
         pen_limit = max(min(2.0 * d0, cap), 1e-3 * float(np.min(self.size)),
                         2.0 * self._deepest_penetration() + min(d0, cap))
-        with section("detection"):
-            cand = narrow_phase(st.x, self.topo, d0, pen_limit)
+        if self.n_blocks > 1:
+            with section("detection"):
+                cand = narrow_phase(st.x, self.topo, d0, pen_limit)
+                contacts, fresh, geom = carry_over(st.contacts, cand, st.x, self.topo.nxt,
+                                                   self.topo.prv, self.n_blocks)
+        else:  # a single block: nothing to detect
+            cand = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
             contacts, fresh, geom = carry_over(st.contacts, cand, st.x, self.topo.nxt,
                                                self.topo.prv, self.n_blocks)
         joint = self._joint_index(contacts.bj, contacts.bk)
@@ -356,8 +364,10 @@ class Simulation:
                                  self.joint_pn[joint], self.joint_ps[joint], laws, geom)
         problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=self.free,
                               d_known=d_known, element=element,
-                              max_open_close=self.max_open_close)
+                              max_open_close=self.max_open_close, rigid=self.rigid)
         sol = self.solver.solve_step(problem)
+        sol.unknowns = problem.pattern.unknowns
+        sol.pairs = cand.pairs
         if not sol.converged:
             return None, sol
         d = sol.d
@@ -381,6 +391,8 @@ class Simulation:
                           f" of its size {self.size[worst]:.3g} m")
             return None, sol
         vel = np.where(self.free[:, None], updated_velocity(d, v_eff, dt), 0.0)
+        if self.rigid is not None:
+            vel[self.rigid, 3:] = 0.0
         vel[~self.free, :2] = known_v[~self.free]
         for mo in self.full_motions:
             vel[mo.block, :2] = d_known[mo.block, :2] / dt
@@ -612,6 +624,7 @@ class Simulation:
             open_close_passes=sol.open_close_passes, contacts=len(c),
             closed=int(np.count_nonzero(c.state != OPEN)), retries=tries,
             wall_time=_time.perf_counter() - start, solves=profile.solves,
+            unknowns=sol.unknowns, pairs=sol.pairs,
             residual_norms=sol.residual_norms,
             **{f"{name}_time": sec for name, sec in profile.seconds.items()},
         )

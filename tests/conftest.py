@@ -18,8 +18,8 @@ def box(x0, y0, w, h):
     return [(x0, y0), (x0 + w, y0), (x0 + w, y0 + h), (x0, y0 + h)]
 
 
-def incline_scene(phi, slope_deg=30.0, penalty=1e9, gravity=9.81):
-    """A 0.5 m square block on a fixed wedge whose top face rises at slope_deg."""
+def incline_scene(phi, slope_deg=30.0, penalty=1e9, gravity=9.81, rigid=False):
+    """A 0.5 m square block (rigid or not) on a fixed wedge whose top face rises at slope_deg."""
     rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
     scene = dda.Scene(gravity=gravity)
     th = np.radians(slope_deg)
@@ -32,7 +32,8 @@ def incline_scene(phi, slope_deg=30.0, penalty=1e9, gravity=9.81):
     n = np.array([-np.sin(th), np.cos(th)])
     p0 = 2.5 * t
     a = 0.5
-    top = scene.add_block([p0, p0 + a * t, p0 + a * t + a * n, p0 + a * n], rock, name="top")
+    top = scene.add_block([p0, p0 + a * t, p0 + a * t + a * n, p0 + a * n], rock, name="top",
+                          rigid=rigid)
     scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
                                   friction=CoulombSingle(phi=phi)))
     return scene, top, t

@@ -151,9 +151,23 @@ class ContactElement:
 
     def __init__(self, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
                  shear_penalty, laws: LawGroups, geometry: ContactGeometry | None = None):
+        if len(contacts) == 0:  # a step without contacts does no contact work
+            self._build_empty(contacts, normal_penalty, shear_penalty, laws)
+            return
         with section("contact_element"):
             self._build(contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws,
                         geometry)
+
+    def _build_empty(self, contacts, normal_penalty, shear_penalty, laws):
+        self.contacts = contacts
+        self.bj, self.bk = contacts.bj, contacts.bk
+        self.normal_penalty, self.shear_penalty = normal_penalty, shear_penalty
+        self.laws = laws
+        z, z2 = np.zeros(0), np.zeros((0, 2))
+        self.geometry = ContactGeometry(z2, z2, z2, z, z2, z2, z, z)
+        self.gap0 = self.shear0 = self.length = z
+        self.maps = tuple(np.zeros((0, 2, 12)) for _ in range(3))
+        self.e_row = self.i_row = np.zeros((0, 12))
 
     def _build(self, contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws,
                geom):

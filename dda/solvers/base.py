@@ -34,6 +34,7 @@ class StepProblem:
     d_known : (n_blocks, 6) known increments of the other blocks
     element : ContactElement of the step's contacts
     max_open_close : limit of OPEN-CLOSE passes before the step is declared failed
+    rigid : (n_blocks,) bool or None, blocks with 3 unknowns (no strain)
     """
 
     dt: float
@@ -43,12 +44,13 @@ class StepProblem:
     d_known: np.ndarray
     element: ContactElement
     max_open_close: int = 12
+    rigid: np.ndarray | None = None
 
     @cached_property
     def pattern(self) -> SystemPattern:
         """The assembly's index work for this step's blocks and contacts (built once)."""
         with section("assembly"):
-            return SystemPattern(self.free, self.element.bj, self.element.bk)
+            return SystemPattern(self.free, self.element.bj, self.element.bk, self.rigid)
 
 
 @dataclass
@@ -66,6 +68,8 @@ class StepSolution:
     reason: str = ""
     residual_norms: list[float] = field(default_factory=list)
     search_hint: float = 0.0
+    unknowns: int = 0
+    pairs: int = 0
 
 
 class NonlinearSolver(ABC):

@@ -39,6 +39,8 @@ class LegacyPullBack(NonlinearSolver):
         oc = open_close(problem, explicit=True)
         if not oc.converged:
             return StepSolution(None, None, False, oc.passes, oc.passes, oc.reason)
+        if len(el) == 0:
+            return StepSolution(oc.d, c, True, oc.passes, oc.passes)
         state, gap, dgs, history, d = oc.state, oc.gap, oc.dgs, oc.history, oc.d
         closed = state != OPEN
         t_n = np.where(closed, np.minimum(pn * gap, 0.0), 0.0)

@@ -39,15 +39,26 @@ class SystemPattern:
     ----------
     free : (n_blocks,) bool, blocks with unknowns
     bj, bk : (m,) the two blocks of each contact
+    rigid : (n_blocks,) bool, optional
+        Blocks without strain: their three strain rows and columns are left out of the
+        system (``unknowns`` counts what is solved for).
     """
 
-    def __init__(self, free, bj, bk):
+    def __init__(self, free, bj, bk, rigid=None):
         n_blocks = len(free)
         slot = np.full(n_blocks, -1, dtype=np.int64)
         self.free_blocks = free_blocks = np.flatnonzero(free)
         slot[free_blocks] = np.arange(len(free_blocks))
         self.n = n = 6 * len(free_blocks)
         self.n_blocks = n_blocks
+        # the unknowns actually solved for: a rigid block keeps translation and rotation only
+        self.keep = None
+        self.unknowns = n
+        if rigid is not None and np.any(rigid[free_blocks]):
+            mask = np.ones((len(free_blocks), 6), dtype=bool)
+            mask[rigid[free_blocks], 3:] = False
+            self.keep = np.flatnonzero(mask.ravel())
+            self.unknowns = len(self.keep)
         # the matrix is made of 6 x 6 blocks: index work on block entries, not scalars
         brow, bcol = [slot[free_blocks]], [slot[free_blocks]]
         self.rhs_index = []  # per side a: (contacts whose block a is free, their rhs rows)
@@ -90,7 +101,28 @@ class SystemPattern:
         self.indptr = np.append(col_start.reshape(-1), self.nnz).astype(np.int32)
 
     def matrix(self, block_k, pair_k):
-        """The free blocks' matrix: dense up to ``DENSE_LIMIT`` unknowns, else CSC."""
+        """The matrix of the unknowns: dense up to ``DENSE_LIMIT`` unknowns, else CSC."""
+        k = self._full_matrix(block_k, pair_k)
+        if self.keep is None:
+            return k
+        if isinstance(k, np.ndarray):
+            return k[np.ix_(self.keep, self.keep)]
+        return k[:, self.keep][self.keep, :].tocsc()
+
+    def reduce(self, vector):
+        """The entries of a free blocks' vector (6 per block) that are unknowns."""
+        return vector if self.keep is None else vector[self.keep]
+
+    def expand(self, solution):
+        """The free blocks' increments (6 per block) from the unknowns (zero strain of a
+        rigid block)."""
+        if self.keep is None:
+            return solution
+        out = np.zeros(self.n)
+        out[self.keep] = solution
+        return out
+
+    def _full_matrix(self, block_k, pair_k):
         vals = [block_k[self.free_blocks].reshape(-1)]
         for a, b, both, _, _ in self.couplings:
             vals.append(pair_k[both, 6 * a:6 * a + 6, 6 * b:6 * b + 6].reshape(-1))
@@ -116,7 +148,8 @@ class SystemPattern:
         return rhs
 
 
-def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, pattern=None):
+def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, pattern=None,
+                       rigid=None):
     """Assemble and solve ``K d = F`` for the free blocks.
 
     Parameters
@@ -129,7 +162,9 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
     pair_f : (m, 12) contact forces on [d_j; d_k]
     d_known : (n_blocks, 6) increments of the blocks whose motion is known
     pattern : SystemPattern, optional
-        The index work for (free, bj, bk), when it is reused (built here otherwise).
+        The index work for (free, bj, bk, rigid), when it is reused (built here otherwise).
+    rigid : (n_blocks,) bool, optional
+        Blocks without strain unknowns (used when the pattern is built here).
 
     Returns
     -------
@@ -137,16 +172,16 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
     """
     with section("assembly"):
         if pattern is None:
-            pattern = SystemPattern(free, bj, bk)
+            pattern = SystemPattern(free, bj, bk, rigid)
         d = d_known.copy()
-        if pattern.n == 0:
+        if pattern.unknowns == 0:
             return d
         k = pattern.matrix(block_k, pair_k)
-        rhs = pattern.rhs(block_f, pair_k, pair_f, d_known)
+        rhs = pattern.reduce(pattern.rhs(block_f, pair_k, pair_f, d_known))
     with section("solve"):
         count_solve()
         sol = _solve(k, rhs)
-    d[pattern.free_blocks] = sol.reshape(-1, 6)
+    d[pattern.free_blocks] = pattern.expand(sol).reshape(-1, 6)
     return d
 
 
@@ -186,10 +221,11 @@ def _sparse_solve(k, rhs):
     return spla.spsolve(k, rhs)
 
 
-def assemble_vector(block_f, free, bj, bk, pair_f):
+def assemble_vector(block_f, free, bj, bk, pair_f, rigid=None):
     """Add per-contact vectors (m, 12) on [d_j; d_k] to per-block vectors (n_blocks, 6).
 
-    Rows of blocks without unknowns are set to zero (their forces are reactions).
+    Rows of blocks without unknowns are set to zero (their forces are reactions), and so are
+    the strain rows of ``rigid`` blocks.
     """
     with section("assembly"):
         out = block_f.copy()
@@ -197,4 +233,6 @@ def assemble_vector(block_f, free, bj, bk, pair_f):
             np.add.at(out, bj, pair_f[:, :6])
             np.add.at(out, bk, pair_f[:, 6:])
         out[~free] = 0.0
+        if rigid is not None:
+            out[rigid, 3:] = 0.0
         return out

@@ -63,6 +63,8 @@ class NewtonRaphson(NonlinearSolver):
         oc = open_close(problem, explicit=False)
         if not oc.converged:
             return StepSolution(None, None, False, oc.passes, 0, oc.reason)
+        if len(problem.element) == 0:  # no contacts: the step is linear, its solve exact
+            return StepSolution(oc.d, problem.element.contacts, True, oc.passes, 0)
         sol = self.iterate(problem, oc.d)
         sol.open_close_passes = oc.passes
         return sol
@@ -83,9 +85,9 @@ class NewtonRaphson(NonlinearSolver):
             resp = el.response(d)
             inertia = np.einsum("bij,bj->bi", problem.block_k, d)
             block_r = inertia - problem.block_f
-            r = assemble_vector(block_r, free, el.bj, el.bk, resp.residual)
+            r = assemble_vector(block_r, free, el.bj, el.bk, resp.residual, problem.rigid)
             contact = assemble_vector(np.zeros_like(block_r), free, el.bj, el.bk,
-                                      np.abs(resp.residual))
+                                      np.abs(resp.residual), problem.rigid)
             norm = float(np.linalg.norm(r[free]))
             scale = max(float(np.linalg.norm(problem.block_f[free])),
                         float(np.linalg.norm(inertia[free])),

@@ -78,6 +78,16 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
     el = problem.element
     c = el.contacts
     m = len(el)
+    if m == 0:  # no contacts: one linear solve settles the step
+        try:
+            d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
+                                   el.bk, np.zeros((0, 12, 12)), np.zeros((0, 12)),
+                                   problem.d_known, problem.pattern)
+        except SingularSystemError as exc:
+            return OpenCloseResult(False, 1, f"singular system: {exc}")
+        z = np.zeros(0)
+        return OpenCloseResult(True, 1, "", d, np.zeros(0, dtype=np.int8), z, z,
+                               {k: v.copy() for k, v in c.history.items()})
     pn, ps, lc = el.normal_penalty, el.shear_penalty, el.length
     laws = el.laws
     closed0 = c.state != OPEN
