@@ -173,6 +173,19 @@ class Result:
                 out[i, 1] = f @ np.array([n[1], -n[0]])
         return out
 
+    @property
+    def scene(self):
+        """The :class:`dda.Scene` that was run."""
+        return self._scene
+
+    def joint_pairs(self) -> list[tuple]:
+        """Every pair of blocks (lower index first) that carried a force at some recorded
+        step, as (Block, Block)."""
+        keys = np.unique(np.concatenate([k for k, _, _ in self._pairs] + [np.zeros(0, int)]))
+        n = len(self._names)
+        return [(self._scene.blocks[int(k) // n], self._scene.blocks[int(k) % n])
+                for k in keys]
+
     def profile(self) -> CostProfile:
         """Where the run's time went: seconds per part of the step and the work counts.
 

@@ -1,0 +1,569 @@
+"""Scene files: a TOML description of everything the Python API can say about a run.
+
+``dda.load_scene(path)`` reads one into a :class:`LoadedScene` (the :class:`dda.Scene`, its
+blocks by name, the solver and run settings); ``loaded.simulation()`` builds the
+:class:`dda.Simulation` and ``loaded.run()`` runs it with the file's output settings. An
+error names the file, the line and the key, for example
+``slope.toml, line 14, blocks[2].material: no material 'rok' (there are: rock)``.
+
+The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
+
+    [scene]
+    gravity = 9.81                        # 0 or absent: no gravity
+
+    [materials.rock]                      # any number of named materials
+    young = 10e9
+    poisson = 0.25
+    density = 2600.0
+    plane = "stress"                      # or "strain"
+
+    [joints.default]                      # the default joint; [[joints.pair]] for one pair
+    normal_penalty = 5e10
+    shear_penalty = 5e10
+    friction = { law = "coulomb", phi = 35.0, cohesion = 0.0 }
+    # law = "transition": phi_static, phi_dynamic; law = "barton": jrc, jcs, phi_r, ...
+
+    [[joints.pair]]
+    between = ["base", "top"]
+    normal_penalty = 1e9
+    shear_penalty = 1e9
+    friction = { law = "coulomb", phi = 20.0 }
+
+    [[blocks]]
+    name = "base"
+    material = "rock"
+    vertices = [[0, 0], [4, 0], [4, 1], [0, 1]]
+    fixed = true                          # also: rigid, velocity, angular_velocity
+
+    [[cut]]                               # blocks cut from a domain by joint sets
+    name = "rock"                         # blocks rock0, rock1, ... (bottom to top)
+    material = "rock"
+    domain = [[1, 1], [3, 1], [3, 3], [1, 3]]
+    min_size = 0.05
+    seed = 0
+    joint_sets = [{ dip = 30, spacing = 0.5, offset = 0.1 },
+                  { dip = -60, spacing = 0.7, persistence = 0.8, trace_length = 2.0 }]
+
+    [[shake]]                             # a sine, a record, or a CSV file (t, ax[, ay])
+    block = "base"
+    sine = { amplitude = 2.94, frequency = 2.0, start = 0.0, direction = [1, 0] }
+    # times = [0, 0.1, ...]  values = [[ax, ay], ...]     or   file = "accel.csv"
+
+    [[prescribe]]                         # a constant velocity; leave out x or y to free it
+    block = "top"
+    velocity = { x = 1e-3 }
+    penalty = 1e12                        # optional, with points = [[x, y], ...]
+
+    [[load]]
+    block = "top"
+    point = [2.0, 2.0]
+    force = [0.0, -1e5]
+
+    [simulation]
+    dt = 1e-3
+    duration = 1.0
+    solver = "newton"                     # or "legacy"; tol and max_iter for newton
+    analysis = "dynamic"                  # also: velocity_carry, max_open_close,
+                                          # record_every, max_displacement_ratio
+
+    [output]
+    prefix = "case"                       # files OUT/case_00000.vtu ... and OUT/case.pvd
+    every = 10                            # write every 10th recorded step
+    dir = "out"                           # relative to the scene file; --out overrides
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10
+    import tomli as tomllib
+
+__all__ = ["load_scene", "LoadedScene", "SceneFileError", "SineAcceleration",
+           "ConstantVelocity"]
+
+
+class SceneFileError(ValueError):
+    """An error in a scene file: ``file, line N, key: what is wrong``."""
+
+
+@dataclass(frozen=True)
+class SineAcceleration:
+    """``amplitude sin(2 pi f (t - start))`` along ``direction`` from ``start`` on (m/s^2).
+
+    A module-level class, not a lambda, so a run from a scene file can be checkpointed.
+    """
+
+    amplitude: float
+    frequency: float
+    start: float = 0.0
+    direction: tuple = (1.0, 0.0)
+
+    def __call__(self, t):
+        if t < self.start:
+            return (0.0, 0.0)
+        a = self.amplitude * math.sin(2.0 * math.pi * self.frequency * (t - self.start))
+        return (a * self.direction[0], a * self.direction[1])
+
+
+@dataclass(frozen=True)
+class ConstantVelocity:
+    """Displacement ``(vx t, vy t)``; a component given as None is left free."""
+
+    vx: float | None
+    vy: float | None
+
+    def __call__(self, t):
+        return (None if self.vx is None else self.vx * t,
+                None if self.vy is None else self.vy * t)
+
+
+# ---------------------------------------------------------------------- line numbers
+_HEADER = re.compile(r"^\s*(\[\[?)\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
+_KEY = re.compile(r"""^\s*("[^"]*"|'[^']*'|[A-Za-z0-9_.-]+)\s*=""")
+
+
+def _split_key(key: str) -> list[str]:
+    return [p.strip().strip("\"'") for p in key.split(".")]
+
+
+def key_lines(text: str) -> dict[tuple, int]:
+    """Line (1-based) of every table and top-level key of a TOML text, by path.
+
+    A path is a tuple of names and array-of-table indices, for example
+    ``("blocks", 2, "material")``. Keys inside inline tables and multi-line arrays belong to
+    the line of the key that opens them.
+    """
+    lines: dict[tuple, int] = {}
+    counts: dict[tuple, int] = {}
+    table: tuple = ()
+    depth = 0  # open brackets of a multi-line value
+    for number, raw in enumerate(text.splitlines(), start=1):
+        line = raw.split("#", 1)[0] if '"' not in raw and "'" not in raw else raw
+        if depth == 0:
+            m = _HEADER.match(raw)
+            if m and not _KEY.match(raw):
+                path = tuple(_split_key(m.group(2)))
+                if m.group(1) == "[[":
+                    i = counts.get(path, 0)
+                    counts[path] = i + 1
+                    table = (*path, i)
+                else:
+                    table = path
+                lines.setdefault(table, number)
+                continue
+            m = _KEY.match(raw)
+            if m:
+                lines.setdefault((*table, *_split_key(m.group(1))), number)
+        depth += line.count("[") + line.count("{") - line.count("]") - line.count("}")
+        depth = max(depth, 0)
+    return lines
+
+
+# ---------------------------------------------------------------------- reading
+@dataclass
+class _Reader:
+    """Typed access to the parsed TOML with errors that name the file, line and key."""
+
+    name: str
+    lines: dict
+
+    def error(self, path: tuple, message: str) -> SceneFileError:
+        line = None
+        for n in range(len(path), -1, -1):
+            if path[:n] in self.lines:
+                line = self.lines[path[:n]]
+                break
+        key = _format_path(path)
+        where = f"{self.name}, line {line}" if line else self.name
+        return SceneFileError(f"{where}, {key}: {message}" if key else f"{where}: {message}")
+
+    def table(self, data, path, known):
+        if not isinstance(data, dict):
+            raise self.error(path, f"must be a table, got {type(data).__name__}")
+        for key in data:
+            if key not in known:
+                raise self.error((*path, key), "unknown key (known here: "
+                                 f"{', '.join(sorted(known))})")
+        return data
+
+    def number(self, data, path, key, default=None, positive=False):
+        if key not in data:
+            if default is None:
+                raise self.error(path, f"needs '{key}'")
+            return default
+        v = data[key]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+            raise self.error((*path, key), f"must be a finite number, got {v!r}")
+        if positive and v <= 0:
+            raise self.error((*path, key), f"must be positive, got {v!r}")
+        return float(v)
+
+    def points(self, data, path, key, count=None):
+        if key not in data:
+            raise self.error(path, f"needs '{key}'")
+        try:
+            a = np.array(data[key], dtype=float)
+        except (TypeError, ValueError):
+            a = None
+        if a is None or a.ndim != 2 or a.shape[1] != 2 or (count and len(a) != count):
+            raise self.error((*path, key), "must be a list of [x, y] pairs")
+        return a
+
+    def pair(self, data, path, key, default):
+        if key not in data:
+            return default
+        v = data[key]
+        if (not isinstance(v, list) or len(v) != 2
+                or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
+            raise self.error((*path, key), f"must be [x, y], got {v!r}")
+        return (float(v[0]), float(v[1]))
+
+    def call(self, path, fn, *args, **kwargs):
+        """Call an API function and turn its ValueError/TypeError into this file's error."""
+        try:
+            return fn(*args, **kwargs)
+        except (ValueError, TypeError) as exc:
+            raise self.error(path, str(exc)) from None
+
+
+def _format_path(path) -> str:
+    out = ""
+    for p in path:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out
+
+
+@dataclass
+class LoadedScene:
+    """A scene file read into the API's objects.
+
+    Attributes
+    ----------
+    scene : dda.Scene
+    blocks : dict of name -> dda.Block
+    solver : the solver named by ``[simulation] solver``
+    settings : keyword arguments of :class:`dda.Simulation` (dt, analysis, ...)
+    duration : simulated time of ``[simulation] duration`` (None when left out)
+    output_dir, prefix, every : the ``[output]`` table (output_dir None: no files)
+    path : the file read
+    """
+
+    scene: object
+    blocks: dict
+    solver: object
+    settings: dict
+    duration: float | None
+    output_dir: Path | None
+    prefix: str
+    every: int
+    path: Path
+    effects: list = field(default_factory=list)
+
+    def simulation(self):
+        """The :class:`dda.Simulation` of this scene with the file's settings."""
+        from dda.simulation import Simulation
+
+        return Simulation(self.scene, solver=self.solver, **self.settings)
+
+    def run(self, duration=None, out=None, progress=None):
+        """Run the scene for ``duration`` (default: the file's), writing to ``out`` or the
+        file's ``[output] dir``; returns the :class:`dda.Result`."""
+        duration = self.duration if duration is None else duration
+        if duration is None:
+            raise SceneFileError(f"{self.path.name}: give [simulation] duration (or a "
+                                 "duration)")
+        return self.simulation().run(duration, output=self.writer(out), progress=progress)
+
+    def writer(self, out=None):
+        """The VTU writer of the ``[output]`` table (``out`` overrides its folder)."""
+        from dda.io.vtu import VTUWriter
+
+        folder = Path(out) if out is not None else self.output_dir
+        if folder is None:
+            return None
+        return VTUWriter(folder / self.prefix, every=self.every)
+
+
+_LAWS = {"coulomb": ("CoulombSingle", {"phi", "cohesion"}),
+         "transition": ("StaticDynamicTransition", {"phi_static", "phi_dynamic", "onset"}),
+         "barton": ("BartonBandis", {"jrc", "jcs", "phi_r", "mobilized", "slip_at_peak",
+                                     "block_size", "dilation", "max_angle"})}
+
+
+def load_scene(path) -> LoadedScene:
+    """Read a TOML scene file (format in :mod:`dda.io.scene_file`).
+
+    Raises
+    ------
+    SceneFileError
+        Naming the file, the line and the key of the first error.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> f = pathlib.Path(tempfile.mkdtemp()) / "drop.toml"
+    >>> _ = f.write_text('''
+    ... [scene]
+    ... gravity = 9.81
+    ... [materials.rock]
+    ... young = 1e9
+    ... poisson = 0.2
+    ... density = 2500.0
+    ... [[blocks]]
+    ... name = "stone"
+    ... material = "rock"
+    ... vertices = [[0, 0], [1, 0], [1, 1], [0, 1]]
+    ... [simulation]
+    ... dt = 0.01
+    ... duration = 0.1
+    ... solver = "legacy"
+    ... ''')
+    >>> loaded = load_scene(f)
+    >>> result = loaded.run()
+    >>> round(float(result.displacement(loaded.blocks["stone"])[-1, 1]), 5)
+    -0.04905
+    """
+    import dda
+    from dda import contact
+    from dda.cutting import JointSet, cut_blocks
+    from dda.materials import LinearElastic
+    from dda.solvers import LegacyPullBack, NewtonRaphson
+
+    path = Path(path)
+    if not path.is_file():
+        raise SceneFileError(f"no scene file {path}")
+    text = path.read_text(encoding="utf-8")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneFileError(f"{path.name}: not valid TOML: {exc}") from None
+    r = _Reader(path.name, key_lines(text))
+    r.table(data, (), {"scene", "materials", "joints", "blocks", "cut", "shake", "prescribe",
+                       "load", "simulation", "output"})
+
+    sc = r.table(data.get("scene", {}), ("scene",), {"gravity"})
+    gravity = r.number(sc, ("scene",), "gravity", default=0.0)
+    scene = r.call(("scene",), dda.Scene, gravity=gravity or None)
+    effects = ["gravity"] if gravity else []
+
+    materials = {}
+    for name, m in r.table(data.get("materials", {}), ("materials",), set(
+            data.get("materials", {}))).items():
+        p = ("materials", name)
+        r.table(m, p, {"young", "poisson", "density", "plane"})
+        kwargs = {k: r.number(m, p, k) for k in ("young", "poisson", "density")}
+        if "plane" in m:
+            kwargs["plane"] = m["plane"]
+        materials[name] = r.call(p, LinearElastic, **kwargs)
+
+    def material(spec, p):
+        if "material" not in spec:
+            raise r.error(p, "needs 'material'")
+        name = spec["material"]
+        if name not in materials:
+            raise r.error((*p, "material"), f"no material {name!r} (there are: "
+                          f"{', '.join(materials) or 'none; add a [materials.NAME] table'})")
+        return materials[name]
+
+    blocks = {}
+    for i, b in enumerate(_array(r, data, "blocks")):
+        p = ("blocks", i)
+        r.table(b, p, {"name", "material", "vertices", "fixed", "rigid", "velocity",
+                       "angular_velocity"})
+        kwargs = {"fixed": _bool(r, b, p, "fixed"), "rigid": _bool(r, b, p, "rigid"),
+                  "velocity": r.pair(b, p, "velocity", (0.0, 0.0)),
+                  "angular_velocity": r.number(b, p, "angular_velocity", default=0.0)}
+        h = r.call(p, scene.add_block, r.points(b, p, "vertices"), material(b, p),
+                   name=b.get("name"), **kwargs)
+        blocks[h.name] = h
+
+    for i, c in enumerate(_array(r, data, "cut")):
+        p = ("cut", i)
+        r.table(c, p, {"name", "material", "domain", "joint_sets", "min_size", "seed",
+                       "fixed", "rigid"})
+        sets = []
+        if not isinstance(c.get("joint_sets"), list):
+            raise r.error(p, "needs 'joint_sets', a list of tables {dip, spacing, ...}")
+        for j, js in enumerate(c["joint_sets"]):
+            q = (*p, "joint_sets", j)
+            r.table(js, q, {"dip", "spacing", "offset", "persistence", "trace_length"})
+            sets.append(r.call(q, JointSet, **js))
+        kwargs = {}
+        if "min_size" in c:
+            kwargs["min_size"] = r.number(c, p, "min_size")
+        if "seed" in c:
+            kwargs["seed"] = int(r.number(c, p, "seed"))
+        polys = r.call(p, cut_blocks, r.points(c, p, "domain"), sets, **kwargs)
+        prefix = c.get("name", f"cut{i}_")
+        mat = material(c, p)
+        for k, poly in enumerate(polys):
+            h = r.call(p, scene.add_block, poly, mat, name=f"{prefix}{k}",
+                       fixed=_bool(r, c, p, "fixed"), rigid=_bool(r, c, p, "rigid"))
+            blocks[h.name] = h
+    if not blocks:
+        raise r.error((), "no blocks: add [[blocks]] or [[cut]] tables")
+
+    def block_of(spec, p, key="block"):
+        if key not in spec:
+            raise r.error(p, f"needs '{key}'")
+        name = spec[key]
+        if name not in blocks:
+            raise r.error((*p, key), f"no block {name!r}")
+        return blocks[name]
+
+    def joint(spec, p, extra=()):
+        r.table(spec, p, {"normal_penalty", "shear_penalty", "friction", *extra})
+        fr = spec.get("friction")
+        if not isinstance(fr, dict) or fr.get("law") not in _LAWS:
+            raise r.error((*p, "friction"), "must be a table with law = "
+                          f"{' or '.join(repr(k) for k in _LAWS)}")
+        cls_name, known = _LAWS[fr["law"]]
+        args = {k: v for k, v in fr.items() if k != "law"}
+        for k in args:
+            if k not in known:
+                raise r.error((*p, "friction"), f"unknown key '{k}' for law {fr['law']!r} "
+                              f"(known: {', '.join(sorted(known))})")
+        law = r.call((*p, "friction"), getattr(contact, cls_name), **args)
+        return r.call(p, contact.JointMaterial,
+                      normal_penalty=r.number(spec, p, "normal_penalty", positive=True),
+                      shear_penalty=r.number(spec, p, "shear_penalty", positive=True),
+                      friction=law)
+
+    joints = r.table(data.get("joints", {}), ("joints",), {"default", "pair"})
+    if "default" in joints:
+        scene.set_joint(joint(joints["default"], ("joints", "default")))
+    for i, jp in enumerate(_array(r, joints, "pair", ("joints", "pair"))):
+        p = ("joints", "pair", i)
+        if not isinstance(jp.get("between"), list) or len(jp["between"]) != 2:
+            raise r.error(p, "needs between = [block, block]")
+        for name in jp["between"]:
+            if name not in blocks:
+                raise r.error((*p, "between"), f"no block {name!r}")
+        a, b = (blocks[name] for name in jp["between"])
+        r.call(p, scene.set_joint, joint(jp, p, extra=("between",)), between=(a, b))
+
+    base = path.parent
+    for i, s in enumerate(_array(r, data, "shake")):
+        p = ("shake", i)
+        r.table(s, p, {"block", "sine", "times", "values", "file"})
+        h = block_of(s, p)
+        given = [k for k in ("sine", "times", "file") if k in s]
+        if len(given) != 1:
+            raise r.error(p, "give one of sine = {...}, times + values, or file")
+        if "sine" in s:
+            q = (*p, "sine")
+            sine = r.table(s["sine"], q, {"amplitude", "frequency", "start", "direction"})
+            acc = SineAcceleration(r.number(sine, q, "amplitude"),
+                                   r.number(sine, q, "frequency", positive=True),
+                                   r.number(sine, q, "start", default=0.0),
+                                   r.pair(sine, q, "direction", (1.0, 0.0)))
+            r.call(p, scene.shake, h, acceleration=acc)
+        elif "times" in s:
+            if "values" not in s:
+                raise r.error(p, "times needs values")
+            r.call(p, scene.shake, h, acceleration=s["values"], times=s["times"])
+        else:
+            t, a = _read_record(r, (*p, "file"), base / s["file"])
+            r.call(p, scene.shake, h, acceleration=a, times=t)
+        effects.append(f"shaking of {h}")
+
+    for i, m in enumerate(_array(r, data, "prescribe")):
+        p = ("prescribe", i)
+        r.table(m, p, {"block", "velocity", "penalty", "points"})
+        h = block_of(m, p)
+        vel = r.table(m.get("velocity"), (*p, "velocity"), {"x", "y"})
+        q = (*p, "velocity")
+        motion = ConstantVelocity(r.number(vel, q, "x") if "x" in vel else None,
+                                  r.number(vel, q, "y") if "y" in vel else None)
+        kwargs = {}
+        if "penalty" in m:
+            kwargs["penalty"] = r.number(m, p, "penalty", positive=True)
+        if "points" in m:
+            kwargs["points"] = r.points(m, p, "points")
+        r.call(p, scene.prescribe_motion, h, motion, **kwargs)
+        effects.append(f"prescribed motion of {h}")
+
+    for i, ld in enumerate(_array(r, data, "load")):
+        p = ("load", i)
+        r.table(ld, p, {"block", "point", "force"})
+        h = block_of(ld, p)
+        if "point" not in ld or "force" not in ld:
+            raise r.error(p, "needs point and force")
+        r.call(p, scene.add_point_load, h, r.pair(ld, p, "point", None),
+               r.pair(ld, p, "force", None))
+        effects.append(f"point load on {h}")
+
+    p = ("simulation",)
+    sim = r.table(data.get("simulation", {}), p, {
+        "dt", "duration", "solver", "tol", "max_iter", "analysis", "velocity_carry",
+        "max_open_close", "record_every", "max_displacement_ratio"})
+    solver_name = sim.get("solver", "newton")
+    if solver_name == "newton":
+        kw = {k: sim[k] for k in ("tol", "max_iter") if k in sim}
+        solver = r.call(p, NewtonRaphson, **kw)
+    elif solver_name == "legacy":
+        if "tol" in sim or "max_iter" in sim:
+            raise r.error(p, "tol and max_iter are Newton's settings (solver = \"newton\")")
+        solver = LegacyPullBack()
+    else:
+        raise r.error((*p, "solver"), f"must be 'newton' or 'legacy', got {solver_name!r}")
+    settings = {"dt": r.number(sim, p, "dt", positive=True)}
+    for k in ("analysis", "velocity_carry", "max_open_close", "record_every",
+              "max_displacement_ratio"):
+        if k in sim:
+            settings[k] = sim[k]
+    duration = r.number(sim, p, "duration", positive=True) if "duration" in sim else None
+
+    out = r.table(data.get("output", {}), ("output",), {"dir", "prefix", "every"})
+    out_dir = base / out["dir"] if "dir" in out else None
+    prefix = str(out.get("prefix", path.stem))
+    every = int(r.number(out, ("output",), "every", default=1.0, positive=True))
+    loaded = LoadedScene(scene, blocks, solver, settings, duration, out_dir, prefix, every,
+                         path, effects)
+    # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
+    r.call(p, loaded.simulation)
+    return loaded
+
+
+def _array(r, data, key, path=None):
+    path = path or (key,)
+    value = data.get(key, [])
+    if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+        raise r.error(path, f"must be an array of tables ([[{'.'.join(map(str, path))}]])")
+    return value
+
+
+def _bool(r, data, path, key):
+    v = data.get(key, False)
+    if not isinstance(v, bool):
+        raise r.error((*path, key), f"must be true or false, got {v!r}")
+    return v
+
+
+def _read_record(r, path, file):
+    """Times and accelerations (columns t, ax[, ay]) of a CSV file; '#' starts a comment."""
+    if not file.is_file():
+        raise r.error(path, f"no file {file}")
+    rows = []
+    with file.open(newline="") as fh:
+        for row in csv.reader(line for line in fh if not line.lstrip().startswith("#")):
+            if not row:
+                continue
+            try:
+                rows.append([float(v) for v in row])
+            except ValueError:
+                if rows:  # a header is fine, a bad number later is not
+                    raise r.error(path, f"{file.name}: not a number in row {row}") from None
+    a = np.array(rows) if rows else np.zeros((0, 0))
+    if a.ndim != 2 or a.shape[1] not in (2, 3) or len(a) < 2:
+        raise r.error(path, f"{file.name} must have columns t, ax[, ay] and 2 rows or more")
+    return a[:, 0], a[:, 1:]

@@ -1,0 +1,203 @@
+"""TOML scene files: everything the API says, and errors that name the line and the key."""
+
+import textwrap
+
+import numpy as np
+import pytest
+
+import dda
+from dda.contact import BartonBandis, StaticDynamicTransition
+from dda.io.scene_file import SceneFileError, key_lines, load_scene
+from dda.solvers import LegacyPullBack, NewtonRaphson
+
+FULL = """
+[scene]
+gravity = 9.81
+
+[materials.rock]
+young = 1e9
+poisson = 0.25
+density = 2500.0
+
+[materials.soft]
+young = 1e8
+poisson = 0.2
+density = 2000.0
+plane = "strain"
+
+[joints.default]
+normal_penalty = 1e9
+shear_penalty = 1e9
+friction = { law = "coulomb", phi = 30.0 }
+
+[[joints.pair]]
+between = ["base", "top"]
+normal_penalty = 2e9
+shear_penalty = 2e9
+friction = { law = "transition", phi_static = 35.0, phi_dynamic = 25.0 }
+
+[[blocks]]
+name = "base"
+material = "rock"
+vertices = [[0, 0], [4, 0], [4, 1], [0, 1]]
+fixed = true
+
+[[blocks]]
+name = "top"
+material = "soft"
+vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]
+rigid = true
+velocity = [0.1, 0.0]
+
+[[cut]]
+name = "cut"
+material = "rock"
+domain = [[2.5, 1], [3.5, 1], [3.5, 2], [2.5, 2]]
+min_size = 0.05
+joint_sets = [{ dip = 0.0, spacing = 0.5, offset = 0.25 }]
+
+[[shake]]
+block = "base"
+sine = { amplitude = 2.0, frequency = 2.0, start = 0.01 }
+
+[[load]]
+block = "top"
+point = [1.5, 2.0]
+force = [0.0, -100.0]
+
+[simulation]
+dt = 1e-3
+duration = 0.02
+solver = "legacy"
+max_open_close = 20
+
+[output]
+prefix = "full"
+every = 5
+"""
+
+
+def write(tmp_path, text, name="scene.toml"):
+    f = tmp_path / name
+    f.write_text(textwrap.dedent(text))
+    return f
+
+
+def test_a_full_scene_builds_what_the_api_would(tmp_path):
+    loaded = load_scene(write(tmp_path, FULL))
+    scene = loaded.scene
+    assert [b.name for b in scene.blocks] == ["base", "top", "cut0", "cut1", "cut2"]
+    assert scene.gravity == 9.81
+    top = scene._blocks[1]
+    assert top.rigid and top.material.plane == "strain" and top.velocity[0] == 0.1
+    assert scene._blocks[0].fixed
+    pair = scene.joint_for(0, 1)
+    assert isinstance(pair.friction, StaticDynamicTransition) and pair.normal_penalty == 2e9
+    assert scene.joint_for(1, 2).friction.phi == 30.0
+    assert isinstance(loaded.solver, LegacyPullBack)
+    assert loaded.settings == {"dt": 1e-3, "max_open_close": 20}
+    assert loaded.effects == ["gravity", "shaking of block 'base'", "point load on block 'top'"]
+    result = loaded.run(out=tmp_path / "out")
+    assert len(result.stats) == 20
+    assert (tmp_path / "out" / "full.pvd").is_file()
+    # the same scene through the API gives the same numbers
+    api = dda.Scene(gravity=9.81)
+    ids = {}
+    for handle, b in zip(scene.blocks, scene._blocks, strict=True):
+        ids[handle.name] = api.add_block(b.vertices, b.material, fixed=b.fixed, rigid=b.rigid,
+                                         velocity=b.velocity, name=handle.name)
+    api.set_joint(scene._joints.default)
+    api.set_joint(pair, between=(ids["base"], ids["top"]))
+    api.shake(ids["base"], acceleration=lambda t: (
+        2.0 * np.sin(4.0 * np.pi * (t - 0.01)) if t >= 0.01 else 0.0, 0.0))
+    api.add_point_load(ids["top"], (1.5, 2.0), (0.0, -100.0))
+    ref = dda.Simulation(api, dt=1e-3, solver=LegacyPullBack(), max_open_close=20).run(0.02)
+    for name in ("top", "cut0", "cut1", "cut2"):
+        assert np.abs(result.displacement(name)).max() > 0.0
+        np.testing.assert_allclose(result.displacement(name), ref.displacement(name),
+                                   rtol=1e-12, atol=1e-15)
+
+
+def test_barton_and_newton_settings(tmp_path):
+    text = FULL.replace('friction = { law = "coulomb", phi = 30.0 }',
+                        'friction = { law = "barton", jrc = 10.0, jcs = 50e6, phi_r = 28.0 }')
+    text = text.replace('solver = "legacy"', 'solver = "newton"\ntol = 1e-8\nmax_iter = 9')
+    loaded = load_scene(write(tmp_path, text))
+    assert isinstance(loaded.scene._joints.default.friction, BartonBandis)
+    assert isinstance(loaded.solver, NewtonRaphson)
+    assert (loaded.solver.tol, loaded.solver.max_iter) == (1e-8, 9)
+
+
+def test_recorded_and_file_shaking(tmp_path):
+    (tmp_path / "acc.csv").write_text("t,ax,ay\n0,0,0\n1,1,0\n2,0,0\n")
+    base = FULL.replace('sine = { amplitude = 2.0, frequency = 2.0, start = 0.01 }',
+                        'file = "acc.csv"')
+    loaded = load_scene(write(tmp_path, base))
+    u, v = loaded.scene._shakes[0].history.state(1.0)
+    assert v[0] == pytest.approx(0.5) and u[0] == pytest.approx(1 / 6)
+    rec = FULL.replace('sine = { amplitude = 2.0, frequency = 2.0, start = 0.01 }',
+                       'times = [0.0, 1.0]\nvalues = [[0.0, 0.0], [2.0, 0.0]]')
+    u, v = load_scene(write(tmp_path, rec)).scene._shakes[0].history.state(1.0)
+    assert v[0] == pytest.approx(1.0)
+
+
+def test_prescribed_velocity_frees_the_missing_direction(tmp_path):
+    text = FULL.replace('[[load]]', '[[prescribe]]\nblock = "top"\nvelocity = { x = 1e-3 }\n'
+                        '\n[[load]]')
+    loaded = load_scene(write(tmp_path, text))
+    motion = loaded.scene._motions[0]
+    assert motion.displacement.mask.tolist() == [True, False]
+
+
+@pytest.mark.parametrize("change, line, key, words", [
+    ('material = "soft"', 'material = "sofft"', "blocks[1].material", "no material 'sofft'"),
+    ("poisson = 0.2\n", "poisson = 0.7\n", "materials.soft", "poisson"),
+    ("rigid = true", "rigid = 1", "blocks[1].rigid", "true or false"),
+    ('between = ["base", "top"]', 'between = ["base", "tip"]', "joints.pair[0].between",
+     "no block 'tip'"),
+    ("phi_static = 35.0", "phi_static = 35.0, mu = 2", "joints.pair[0].friction",
+     "unknown key 'mu'"),
+    ("dt = 1e-3", "dt = -1e-3", "simulation.dt", "positive"),
+    ("every = 5", "evry = 5", "output.evry", "unknown key"),
+    ("spacing = 0.5", "spacing = -0.5", "cut[0].joint_sets[0]", "spacing"),
+    ("vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]", "vertices = [[1, 1], [1, 2], [2, 2], [2, 1]]",
+     "blocks[1]", "clockwise"),
+    ('solver = "legacy"', 'solver = "implicit"', "simulation.solver", "'newton' or 'legacy'"),
+])
+def test_errors_name_the_line_and_the_key(tmp_path, change, line, key, words):
+    text = FULL.replace(change, line, 1)
+    assert text != FULL
+    f = write(tmp_path, text)
+    with pytest.raises(SceneFileError) as info:
+        load_scene(f)
+    msg = str(info.value)
+    # the line the message names holds the key (or opens its table)
+    number = int(msg.split(", line ")[1].split(",")[0])
+    shown = text.splitlines()[number - 1]
+    last = key.split(".")[-1].split("[")[0]
+    assert last in shown or f"[{last}" in shown or f"[[{last}" in shown, (msg, shown)
+    assert f", {key}:" in msg and words in msg, msg
+
+
+def test_syntax_errors_and_missing_files(tmp_path):
+    with pytest.raises(SceneFileError, match="not valid TOML.*line 2"):
+        load_scene(write(tmp_path, "[scene]\ngravity = = 1\n"))
+    with pytest.raises(SceneFileError, match="no scene file"):
+        load_scene(tmp_path / "nothing.toml")
+    with pytest.raises(SceneFileError, match="no blocks"):
+        load_scene(write(tmp_path, "[scene]\ngravity = 1.0\n"))
+
+
+def test_key_lines_follow_arrays_of_tables():
+    text = '[a]\nx = 1\n[[b]]\ny = [1,\n 2]\nz = 3\n[[b]]\ny = 4\n[c.d]\n"q" = 1\n'
+    lines = key_lines(text)
+    assert lines[("a", "x")] == 2 and lines[("b", 0, "y")] == 4 and lines[("b", 0, "z")] == 6
+    assert lines[("b", 1)] == 7 and lines[("b", 1, "y")] == 8 and lines[("c", "d", "q")] == 10
+
+
+def test_a_scene_file_run_can_be_checkpointed(tmp_path):
+    loaded = load_scene(write(tmp_path, FULL))
+    sim = loaded.simulation()
+    sim.run(0.005, checkpoint=tmp_path / "run.ckpt")
+    resumed = dda.Simulation.resume(tmp_path / "run.ckpt")
+    assert resumed.state.time == pytest.approx(0.005)
