@@ -1,9 +1,9 @@
 """The ``dda`` command: run a scene file or script, run the demo, render a series, describe a
 scene.
 
-    dda run SCENE.toml|SCRIPT.py [--out DIR] [--duration S] [--no-progress]
+    dda run SCENE.toml|SCRIPT.py|RUN.ckpt [--out DIR] [--duration S] [--no-progress]
     dda demo [--out DIR]
-    dda render OUT/case.pvd [--png FILE] [--gif FILE] [--field NAME] [--frame N]
+    dda render OUT/case.pvd [--png FILE] [--gif FILE] [--mp4 FILE] [--field NAME] [--frame N]
     dda info SCENE.toml
 """
 
@@ -33,10 +33,23 @@ def _run_scene(path, out, duration, progress):
     duration = duration if duration is not None else loaded.duration
     if duration is None:
         raise SystemExit(f"{loaded.path.name}: give [simulation] duration or --duration")
-    result = loaded.simulation().run(duration, output=writer, progress=progress)
+    ckpt = loaded.checkpoint_settings(out)
+    result = loaded.simulation().run(duration, output=writer, progress=progress, **ckpt)
     print(result.stats.summary())
     if writer is not None:
         print(f"wrote {len(writer.files)} VTU files and {writer.pvd_path}")
+    if ckpt:
+        print(f"checkpoint {ckpt['checkpoint']}")
+    return result
+
+
+def _resume(path, duration, progress):
+    from dda.simulation import Simulation
+
+    sim = Simulation.resume(path)
+    print(f"{path}: resuming at t = {sim.state.time:g} s")
+    result = sim.run(duration, progress=progress)
+    print(result.stats.summary())
     return result
 
 
@@ -56,6 +69,8 @@ def cmd_run(args):
         raise SystemExit(f"dda run: no file {path}")
     if path.suffix == ".py":
         _run_script(path, args.out)
+    elif path.suffix == ".ckpt":
+        _resume(path, args.duration, _progress(args))
     else:
         _run_scene(path, args.out, args.duration, _progress(args))
     return 0
@@ -75,12 +90,13 @@ def cmd_demo(args):
 def cmd_render(args):
     from dda import plot
 
-    if not (args.png or args.gif):
+    if not (args.png or args.gif or args.mp4):
         args.png = str(Path(args.pvd).with_suffix(".png"))
     if args.png:
         print(f"wrote {plot.render_frame(args.pvd, args.png, frame=args.frame, field=args.field)}")
-    if args.gif:
-        print(f"wrote {plot.animate(args.pvd, args.gif, field=args.field, fps=args.fps)}")
+    for movie in (args.gif, args.mp4):
+        if movie:
+            print(f"wrote {plot.animate(args.pvd, movie, field=args.field, fps=args.fps)}")
     return 0
 
 
@@ -132,8 +148,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="dda", description="2D Discontinuous Deformation "
                                  "Analysis: run scene files, render their output.")
     sub = ap.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("run", help="run a TOML scene or a Python script")
-    p.add_argument("scene", help="SCENE.toml or SCRIPT.py")
+    p = sub.add_parser("run", help="run a TOML scene or a Python script, or resume a "
+                       "checkpoint")
+    p.add_argument("scene", help="SCENE.toml, SCRIPT.py or RUN.ckpt (a checkpoint of a run "
+                   "to finish, or to go on for --duration)")
     p.add_argument("--out", help="output folder (default: the scene's [output] dir, or "
                    "out/NAME)")
     p.add_argument("--duration", type=float, help="simulated time (s), overrides the file's")
@@ -144,10 +162,11 @@ def main(argv=None) -> int:
     p.add_argument("--duration", type=float, help="simulated time (s)")
     p.add_argument("--no-progress", action="store_true")
     p.set_defaults(func=cmd_demo)
-    p = sub.add_parser("render", help="render a PVD series to PNG and/or GIF (pyvista)")
+    p = sub.add_parser("render", help="render a PVD series to PNG, GIF and/or MP4 (pyvista)")
     p.add_argument("pvd")
     p.add_argument("--png", help="PNG of one frame (default: next to the PVD)")
-    p.add_argument("--gif", help="animation, .gif (or .mp4 with imageio-ffmpeg)")
+    p.add_argument("--gif", help="animation, GIF")
+    p.add_argument("--mp4", help="animation, MP4 (H.264; needs dda[vis])")
     p.add_argument("--field", default="displacement", help="cell field to colour by")
     p.add_argument("--frame", type=int, default=-1, help="frame of the PNG (default last)")
     p.add_argument("--fps", type=float, default=10.0)

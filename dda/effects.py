@@ -1,7 +1,7 @@
 """Time histories of the effects a scene can hold: base shaking, prescribed motion, loads.
 
 Each history is evaluated once per step (a handful of user callables per step, never a loop
-over blocks or contacts).
+over blocks or contacts). :class:`TimeTable` is a ready-made history from samples.
 """
 
 from __future__ import annotations
@@ -21,6 +21,61 @@ def _as_xy(value, what: str) -> np.ndarray:
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{what} returned a value that is not finite: {value!r}")
     return a
+
+
+class TimeTable:
+    """A history ``t -> (x, y)`` from samples: linear between them, held outside them.
+
+    A module-level class rather than a lambda, so that a run using it can be checkpointed.
+    Either direction may be left out (None): for ``Scene.prescribe_motion`` that direction is
+    free; a point load needs both.
+
+    Parameters
+    ----------
+    times : (n,) array-like
+        Sample times (s), strictly increasing.
+    x, y : (n,) array-like, optional
+        Values at the samples.
+
+    Examples
+    --------
+    >>> ramp = TimeTable([0.0, 1.0, 2.0], x=[0.0, 1e-3, 1e-3])  # ramp, then hold; y free
+    >>> ramp(0.5), ramp(5.0)
+    ((0.0005, None), (0.001, None))
+    """
+
+    def __init__(self, times, x=None, y=None, name="time table"):
+        self.name = name
+        try:
+            t = np.asarray(times, dtype=float)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name}: times must be a list of numbers") from None
+        if t.ndim != 1 or len(t) < 1:
+            raise ValueError(f"{name}: times must be a 1-D list of at least one time")
+        if not np.all(np.isfinite(t)) or np.any(np.diff(t) <= 0):
+            raise ValueError(f"{name}: times must be finite and increase strictly")
+        if x is None and y is None:
+            raise ValueError(f"{name}: give the values of x, of y or of both")
+        cols = []
+        for label, col in (("x", x), ("y", y)):
+            if col is None:
+                cols.append(None)
+                continue
+            try:
+                c = np.asarray(col, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"{name}: {label} must be a list of numbers") from None
+            if c.shape != t.shape:
+                raise ValueError(f"{name}: {label} has {c.size} values for {len(t)} times")
+            if not np.all(np.isfinite(c)):
+                raise ValueError(f"{name}: {label} contains NaN or inf")
+            cols.append(c)
+        self.times = t
+        self.x, self.y = cols
+
+    def __call__(self, t: float):
+        return tuple(None if c is None else float(np.interp(t, self.times, c))
+                     for c in (self.x, self.y))
 
 
 class AccelerationHistory:

@@ -170,31 +170,36 @@ def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
 
 def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800, 600),
             max_frames: int | None = None) -> Path:
-    """Animate a PVD series to a GIF (Pillow) or an MP4 (imageio with ffmpeg).
+    """Animate a PVD series to a GIF (Pillow) or an MP4 (H.264 through imageio-ffmpeg).
 
-    ``max_frames`` keeps that many frames evenly spread over the series.
+    ``max_frames`` keeps that many frames evenly spread over the series. An MP4's frame
+    size is rounded up to whole 16-pixel blocks, as the codec needs.
     """
+    out = Path(out)
+    kind = out.suffix.lower()
+    if kind not in (".gif", ".mp4"):
+        raise ValueError(f"animate: write a .gif or an .mp4, not {out.suffix or out.name!r}")
+    if kind == ".mp4":
+        try:
+            import imageio.v3 as iio
+            import imageio_ffmpeg  # noqa: F401  (the ffmpeg binary the writer runs)
+        except ImportError:
+            raise ImportError("MP4 needs imageio and imageio-ffmpeg: pip install 'dda[vis]' "
+                              "(or write a .gif)") from None
+        size = tuple(16 * -(-int(s) // 16) for s in size)
     entries = read_pvd(pvd)
     if max_frames is not None and len(entries) > max_frames:
         pick = np.unique(np.linspace(0, len(entries) - 1, max_frames).round().astype(int))
         entries = [entries[i] for i in pick]
     frames = _Frames([entries[0][1], entries[-1][1]], field, size)
     images = [frames.image(f, t) for t, f in entries]
-    out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
-    if out.suffix.lower() == ".gif":
+    if kind == ".gif":
         from PIL import Image
 
         pics = [Image.fromarray(i).convert("P", palette=Image.ADAPTIVE) for i in images]
         pics[0].save(out, save_all=True, append_images=pics[1:], loop=0,
                      duration=int(round(1000.0 / fps)))
-    elif out.suffix.lower() == ".mp4":
-        try:
-            import imageio.v3 as iio
-        except ImportError:
-            raise ImportError("MP4 needs imageio and imageio-ffmpeg: pip install imageio "
-                              "imageio-ffmpeg (or write a .gif)") from None
-        iio.imwrite(out, np.stack(images), fps=fps)
     else:
-        raise ValueError(f"animate: write a .gif or an .mp4, not {out.suffix or out.name!r}")
+        iio.imwrite(out, np.stack(images), plugin="FFMPEG", fps=fps)
     return out

@@ -64,6 +64,13 @@ class _Shake:
 
 
 @dataclass
+class _Damping:
+    blocks: tuple[int, ...] | None  # None: every block
+    mass: float
+    stiffness: float
+
+
+@dataclass
 class _Joints:
     default: JointMaterial | None = None
     pairs: dict[tuple[int, int], JointMaterial] = field(default_factory=dict)
@@ -97,6 +104,7 @@ class Scene:
         self._motions: list[_Motion] = []
         self._shakes: list[_Shake] = []
         self._joints = _Joints()
+        self._damping: list[_Damping] = []
 
     # ------------------------------------------------------------------ blocks
     @property
@@ -304,6 +312,59 @@ class Scene:
         p = finite_vector("point", point, where=f"point load on {h}")
         self._loads.append(_PointLoad(h.index, p, LoadHistory(force, name=f"point load on {h}")))
 
+    def set_damping(self, mass: float = 0.0, stiffness: float = 0.0, blocks=None) -> None:
+        """Viscous (Rayleigh) damping of blocks, ``C = mass * M + stiffness * K_e``.
+
+        The equation of motion becomes ``M a + C v + K u = F`` (METHOD.md section 2, A1-A3);
+        with Newmark's beta 0.5, gamma 1 a step adds ``(2 / dt) C`` to the block's matrix and
+        ``C v_n`` to its forces. A scene without damping has neither term.
+
+        Parameters
+        ----------
+        mass : float
+            Mass-proportional coefficient (1/s). It damps every velocity of the block, rigid
+            motion included, measured from rest (not from a shaking table): a free block
+            moving at ``v`` slows as ``exp(-mass * t)``.
+        stiffness : float
+            Stiffness-proportional coefficient (s). ``K_e`` acts on the strain unknowns only,
+            so this damps the block's own vibration and leaves rigid motion alone; a strain
+            mode of frequency ``omega`` gets the damping ratio ``stiffness * omega / 2``.
+        blocks : list of blocks (handles, names or indices), optional
+            The blocks damped; default every block. A later call overrides an earlier one
+            for the blocks it names; zero for both coefficients removes the damping.
+
+        Examples
+        --------
+        >>> from dda import Scene
+        >>> scene = Scene()
+        >>> scene.set_damping(mass=0.5)
+        >>> scene
+        Scene(0 blocks, damping)
+        """
+        a = finite_number("mass", mass, nonnegative=True, where="set_damping")
+        b = finite_number("stiffness", stiffness, nonnegative=True, where="set_damping")
+        chosen = None
+        if blocks is not None:
+            if isinstance(blocks, (str, Block, int, np.integer)):
+                blocks = [blocks]
+            try:
+                chosen = tuple(self.block(k).index for k in blocks)
+            except TypeError:
+                raise TypeError("set_damping: blocks must be a list of blocks, names or "
+                                f"indices, got {blocks!r}") from None
+        self._damping.append(_Damping(chosen, a, b))
+
+    def damping_coefficients(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Per block (mass, stiffness) damping coefficients, or None without damping."""
+        n = len(self._blocks)
+        alpha, beta = np.zeros(n), np.zeros(n)
+        for d in self._damping:
+            idx = slice(None) if d.blocks is None else list(d.blocks)
+            alpha[idx], beta[idx] = d.mass, d.stiffness
+        if not (alpha.any() or beta.any()):
+            return None
+        return alpha, beta
+
     # ------------------------------------------------------------------ checks
     def joint_for(self, a: int, b: int) -> JointMaterial:
         """The joint between blocks a and b (the pair's, or the default)."""
@@ -355,4 +416,6 @@ class Scene:
             effects.append(f"{len(self._motions)} prescribed")
         if self._loads:
             effects.append(f"{len(self._loads)} point loads")
+        if any(d.mass or d.stiffness for d in self._damping):
+            effects.append("damping")
         return f"Scene({len(self._blocks)} blocks{', ' if effects else ''}{', '.join(effects)})"

@@ -179,6 +179,8 @@ class Simulation:
         for m in full:
             self.free[m.block] = False
         self.constraint_penalty = 100.0 * young.max()
+        # Rayleigh damping coefficients per block, None for a scene without damping
+        self.damping = sc.damping_coefficients()
 
         # joints: one table of unique joints, a default and sorted per-pair overrides
         joints, index_of = [], {}
@@ -281,11 +283,18 @@ class Simulation:
         return u, v
 
     def _block_forces(self, t1, ints, centroid):
-        """Block stiffness, mass and external forces (METHOD.md section 1), (nb, 6[, 6])."""
+        """Block stiffness, mass, damping and external forces (METHOD.md sections 1 and 2).
+
+        Returns (nb, 6, 6) k, m and c (None without damping) and (nb, 6) f.
+        """
         st = self.state
         nb = self.n_blocks
         k = geometry.stiffness_matrices(ints.area, self.elasticity)
         m = geometry.mass_matrices(ints, self.density)
+        c = None
+        if self.damping is not None:  # C = alpha M + beta K_e, before any penalty spring
+            alpha, beta = self.damping
+            c = alpha[:, None, None] * m + beta[:, None, None] * k
         f = np.zeros((nb, 6))
         if self.scene.gravity:
             f[:, 1] -= self.scene.gravity * self.density * ints.area
@@ -305,7 +314,7 @@ class Simulation:
             p = self.pc_penalty
             np.add.at(k, self.pc_block, p[:, None, None] * np.einsum("vij,vik->vjk", t, t))
             np.add.at(f, self.pc_block, p[:, None] * np.einsum("vij,vi->vj", t, target))
-        return k, m, f
+        return k, m, c, f
 
     def _search_distance(self, dt, centroid, known_du):
         st = self.state
@@ -325,10 +334,10 @@ class Simulation:
         t1 = st.time + dt
         ints = geometry.polygon_integrals(st.x, self.offsets, self.topo.nxt)
         centroid = ints.centroid
-        k, m, f = self._block_forces(t1, ints, centroid)
+        k, m, c, f = self._block_forces(t1, ints, centroid)
         # a static analysis carries no velocity: no inertial force term
         v_eff = st.velocity * self.velocity_carry if self.velocity_carry else None
-        k_eff, f_eff = effective_system(k, m, f, v_eff, dt)
+        k_eff, f_eff = effective_system(k, m, f, v_eff, dt, c)
 
         known_u, known_v = self._known_motion(t1)
         d_known = np.zeros((self.n_blocks, 6))

@@ -84,6 +84,25 @@ def test_render_png_and_gif(series, tmp_path):
         assert not_blank(np.asarray(im.convert("RGB"), dtype=float))
 
 
+def test_render_mp4(series, tmp_path):
+    import imageio.v3 as iio
+
+    scene, pvd = series
+    mp4 = tmp_path / "run.mp4"
+    assert main(["render", str(pvd), "--mp4", str(mp4)]) == 0
+    frames = list(iio.imiter(mp4, plugin="FFMPEG"))
+    assert len(frames) == 11
+    assert frames[0].shape == (608, 800, 3)  # 600 rounded up to whole 16-pixel blocks
+    assert not_blank(np.asarray(frames[-1], dtype=float))
+    # the blocks move between the first and the last frame (lossy codec: a real difference)
+    assert np.abs(frames[-1].astype(float) - frames[0].astype(float)).mean() > 1.0
+
+
+def test_animate_refuses_other_formats(series, tmp_path):
+    with pytest.raises(ValueError, match="write a .gif or an .mp4"):
+        plot.animate(series[1], tmp_path / "run.avi")
+
+
 def test_history_plot_is_drawn(series, tmp_path):
     scene, pvd = series
     result = dda.load_scene(scene).run(duration=0.05)

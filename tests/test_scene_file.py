@@ -201,3 +201,155 @@ def test_a_scene_file_run_can_be_checkpointed(tmp_path):
     sim.run(0.005, checkpoint=tmp_path / "run.ckpt")
     resumed = dda.Simulation.resume(tmp_path / "run.ckpt")
     assert resumed.state.time == pytest.approx(0.005)
+
+
+TABLES = """
+[scene]
+gravity = 9.81
+[materials.rock]
+young = 1e9
+poisson = 0.25
+density = 2500.0
+[joints.default]
+normal_penalty = 1e9
+shear_penalty = 1e9
+friction = { law = "coulomb", phi = 30.0 }
+[[blocks]]
+name = "base"
+material = "rock"
+vertices = [[0, 0], [4, 0], [4, 1], [0, 1]]
+fixed = true
+[[blocks]]
+name = "top"
+material = "rock"
+vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]
+[[blocks]]
+name = "platen"
+material = "rock"
+vertices = [[3, 1], [3.5, 1], [3.5, 1.5], [3, 1.5]]
+[[prescribe]]
+block = "platen"
+displacement = { times = [0.0, 0.01, 0.03], x = [0.0, 1e-4, 1e-4] }
+[[load]]
+block = "top"
+point = [2.0, 1.5]
+force = { times = [0.0, 0.02], x = [0.0, 3e4] }
+[[damping]]
+mass = 2.0
+[[damping]]
+stiffness = 1e-4
+blocks = ["top"]
+[simulation]
+dt = 1e-3
+duration = 0.03
+solver = "newton"
+[output]
+prefix = "tables"
+checkpoint = "tables.ckpt"
+checkpoint_every = 10
+"""
+
+
+def test_time_tables_and_damping_equal_the_api(tmp_path):
+    from dda.effects import TimeTable
+
+    loaded = load_scene(write(tmp_path, TABLES))
+    assert loaded.effects == ["gravity", "prescribed motion of block 'platen'",
+                              "point load on block 'top'", "damping"]
+    alpha, beta = loaded.scene.damping_coefficients()
+    # a later table overrides both coefficients of the blocks it names (as set_damping does)
+    assert alpha.tolist() == [2.0, 0.0, 2.0] and beta.tolist() == [0.0, 1e-4, 0.0]
+    result = loaded.run(out=tmp_path / "out")
+    assert (tmp_path / "out" / "tables.ckpt").is_file()
+    # the same scene through the API, with plain functions for the histories
+    api = dda.Scene(gravity=9.81)
+    for handle, b in zip(loaded.scene.blocks, loaded.scene._blocks, strict=True):
+        api.add_block(b.vertices, b.material, fixed=b.fixed, name=handle.name)
+    api.set_joint(loaded.scene._joints.default)
+    api.prescribe_motion("platen", lambda t: (float(np.interp(t, [0, 0.01], [0, 1e-4])), None))
+    api.add_point_load("top", (2.0, 1.5), lambda t: (float(np.interp(t, [0, 0.02], [0, 3e4])),
+                                                     0.0))
+    api.set_damping(mass=2.0)
+    api.set_damping(stiffness=1e-4, blocks=["top"])
+    ref = dda.Simulation(api, dt=1e-3, solver=NewtonRaphson()).run(0.03)
+    for name in ("top", "platen"):
+        assert np.abs(result.displacement(name)).max() > 1e-6
+        np.testing.assert_allclose(result.displacement(name), ref.displacement(name),
+                                   rtol=1e-10, atol=1e-14)
+    # the platen's x follows the table through penalty springs; its y is free: it settles
+    # into its joint with the base under its weight (p_n = 1e9 N/m over two contacts), between
+    # none and twice the static sink (a weight applied at once), held at zero if y were fixed
+    u = result.displacement("platen")
+    assert u[-1, 0] == pytest.approx(1e-4, rel=1e-3)
+    assert 0.2 < -u[-1, 1] / (2500.0 * 9.81 * 0.25 / 2e9) < 2.0
+    # TimeTable holds the last value and leaves a missing direction free
+    table = TimeTable([0.0, 1.0], x=[0.0, 2.0])
+    assert table(0.25) == (0.5, None) and table(9.0) == (2.0, None)
+
+
+def test_a_scene_file_checkpoint_resumes_through_the_command(tmp_path, capsys):
+    from dda.cli import main
+
+    f = write(tmp_path, TABLES)
+    assert main(["run", str(f), "--out", str(tmp_path / "out"), "--duration", "0.01",
+                 "--no-progress"]) == 0
+    ckpt = tmp_path / "out" / "tables.ckpt"
+    assert ckpt.is_file() and f"checkpoint {ckpt}" in capsys.readouterr().out
+    assert main(["run", str(ckpt), "--duration", "0.01", "--no-progress"]) == 0
+    assert "resuming at t = 0.01 s" in capsys.readouterr().out
+    assert dda.Simulation.resume(ckpt).state.time == pytest.approx(0.02)
+
+
+def test_the_file_format_covers_every_api_setting():
+    """A setting added to the API must get a key in the file format (this test says which)."""
+    import inspect
+
+    from dda.io import scene_file
+
+    source = inspect.getsource(scene_file.load_scene)
+    scene_methods = {"add_block": "scene.add_block", "set_joint": "scene.set_joint",
+                     "shake": "scene.shake", "prescribe_motion": "scene.prescribe_motion",
+                     "add_point_load": "scene.add_point_load",
+                     "set_damping": "scene.set_damping"}
+    public = {n for n, v in vars(dda.Scene).items() if callable(v) and not n.startswith("_")}
+    readers = {"block", "joint_for", "validate", "vertex_arrays", "damping_coefficients"}
+    assert public - readers == set(scene_methods), "a new Scene method needs a table"
+    for call in scene_methods.values():
+        assert call in source
+    for name in inspect.signature(dda.Simulation.__init__).parameters:
+        if name not in ("self", "scene", "solver", "output"):
+            assert f'"{name}"' in source, f"[simulation] has no key {name!r}"
+    for name in ("checkpoint", "checkpoint_every"):
+        assert f'"{name}"' in source, f"[output] has no key {name!r}"
+    for name in inspect.signature(dda.Scene.add_block).parameters:
+        if name not in ("self", "vertices"):
+            assert f'"{name}"' in source, f"[[blocks]] has no key {name!r}"
+
+
+@pytest.mark.parametrize("change, line, key, words", [
+    ("displacement = { times = [0.0, 0.01, 0.03], x = [0.0, 1e-4, 1e-4] }",
+     "displacement = { times = [0.0, 0.01, 0.03], x = [0.0, 1e-4] }",
+     "prescribe[0].displacement", "x has 2 values for 3 times"),
+    ("displacement = { times = [0.0, 0.01, 0.03], x = [0.0, 1e-4, 1e-4] }",
+     "displacement = { times = [0.0, 0.01, 0.03], x = [1e-5, 1e-4, 1e-4] }",
+     "prescribe[0]", "displacement(0) must be zero"),
+    ("displacement = { times", "velocity = { x = 1.0 }\ndisplacement = { times",
+     "prescribe[0]", "give one of velocity"),
+    ("force = { times = [0.0, 0.02], x = [0.0, 3e4] }",
+     "force = { times = [0.02, 0.0], x = [0.0, 3e4] }", "load[0].force", "increase strictly"),
+    ('blocks = ["top"]', 'blocks = ["tip"]', "damping[1].blocks", "no block 'tip'"),
+    ("mass = 2.0", "mass = -2.0", "damping[0]", "mass must not be negative"),
+    ("checkpoint_every = 10", "checkpoint_every = 0", "output.checkpoint_every",
+     "at least 1"),
+])
+def test_table_errors_name_the_line_and_the_key(tmp_path, change, line, key, words):
+    text = TABLES.replace(change, line, 1)
+    assert text != TABLES
+    with pytest.raises(SceneFileError) as info:
+        load_scene(write(tmp_path, text))
+    msg = str(info.value)
+    assert f", {key}:" in msg and words in msg, msg
+    number = int(msg.split(", line ")[1].split(",")[0])
+    shown = text.splitlines()[number - 1]
+    last = key.split(".")[-1].split("[")[0]
+    assert last in shown, (msg, shown)

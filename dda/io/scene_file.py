@@ -53,11 +53,19 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     block = "top"
     velocity = { x = 1e-3 }
     penalty = 1e12                        # optional, with points = [[x, y], ...]
+    # or a displacement table (linear between samples, held after the last; zero at t = 0):
+    # displacement = { times = [0, 1, 2], x = [0, 1e-3, 1e-3] }        (y left out: free)
 
     [[load]]
     block = "top"
     point = [2.0, 2.0]
-    force = [0.0, -1e5]
+    force = [0.0, -1e5]                   # or a table: { times = [0, 1], x = [0, 0],
+                                          #               y = [0, -1e5] }  (held after 1 s)
+
+    [[damping]]                           # Rayleigh damping C = mass M + stiffness K_e
+    mass = 0.5                            # 1/s
+    stiffness = 1e-4                      # s
+    blocks = ["top"]                      # optional: default every block
 
     [simulation]
     dt = 1e-3
@@ -70,6 +78,8 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     prefix = "case"                       # files OUT/case_00000.vtu ... and OUT/case.pvd
     every = 10                            # write every 10th recorded step
     dir = "out"                           # relative to the scene file; --out overrides
+    checkpoint = "case.ckpt"              # optional, in the output folder; resume with
+    checkpoint_every = 100                # dda.Simulation.resume (see Simulation.run)
 """
 
 from __future__ import annotations
@@ -255,6 +265,8 @@ class LoadedScene:
     duration : simulated time of ``[simulation] duration`` (None when left out)
     output_dir, prefix, every : the ``[output]`` table (output_dir None: no files)
     path : the file read
+    effects : what the scene holds, in words (gravity, shaking of ..., damping, ...)
+    checkpoint, checkpoint_every : the ``[output]`` checkpoint file name (None: none)
     """
 
     scene: object
@@ -267,6 +279,8 @@ class LoadedScene:
     every: int
     path: Path
     effects: list = field(default_factory=list)
+    checkpoint: str | None = None
+    checkpoint_every: int = 100
 
     def simulation(self):
         """The :class:`dda.Simulation` of this scene with the file's settings."""
@@ -281,13 +295,27 @@ class LoadedScene:
         if duration is None:
             raise SceneFileError(f"{self.path.name}: give [simulation] duration (or a "
                                  "duration)")
-        return self.simulation().run(duration, output=self.writer(out), progress=progress)
+        return self.simulation().run(duration, output=self.writer(out), progress=progress,
+                                     **self.checkpoint_settings(out))
+
+    def output_folder(self, out=None) -> Path | None:
+        """The folder files go to: ``out``, else the file's ``[output] dir`` (None: none)."""
+        return Path(out) if out is not None else self.output_dir
+
+    def checkpoint_settings(self, out=None) -> dict:
+        """``checkpoint`` and ``checkpoint_every`` keyword arguments of
+        :meth:`dda.Simulation.run` (empty without ``[output] checkpoint``)."""
+        if self.checkpoint is None:
+            return {}
+        folder = self.output_folder(out)
+        path = Path(self.checkpoint) if folder is None else folder / self.checkpoint
+        return {"checkpoint": path, "checkpoint_every": self.checkpoint_every}
 
     def writer(self, out=None):
         """The VTU writer of the ``[output]`` table (``out`` overrides its folder)."""
         from dda.io.vtu import VTUWriter
 
-        folder = Path(out) if out is not None else self.output_dir
+        folder = self.output_folder(out)
         if folder is None:
             return None
         return VTUWriter(folder / self.prefix, every=self.every)
@@ -348,7 +376,7 @@ def load_scene(path) -> LoadedScene:
         raise SceneFileError(f"{path.name}: not valid TOML: {exc}") from None
     r = _Reader(path.name, key_lines(text))
     r.table(data, (), {"scene", "materials", "joints", "blocks", "cut", "shake", "prescribe",
-                       "load", "simulation", "output"})
+                       "load", "damping", "simulation", "output"})
 
     sc = r.table(data.get("scene", {}), ("scene",), {"gravity"})
     gravity = r.number(sc, ("scene",), "gravity", default=0.0)
@@ -478,12 +506,18 @@ def load_scene(path) -> LoadedScene:
 
     for i, m in enumerate(_array(r, data, "prescribe")):
         p = ("prescribe", i)
-        r.table(m, p, {"block", "velocity", "penalty", "points"})
+        r.table(m, p, {"block", "velocity", "displacement", "penalty", "points"})
         h = block_of(m, p)
-        vel = r.table(m.get("velocity"), (*p, "velocity"), {"x", "y"})
-        q = (*p, "velocity")
-        motion = ConstantVelocity(r.number(vel, q, "x") if "x" in vel else None,
-                                  r.number(vel, q, "y") if "y" in vel else None)
+        if ("velocity" in m) == ("displacement" in m):
+            raise r.error(p, "give one of velocity = {x, y} or displacement = {times, x, y}")
+        if "velocity" in m:
+            q = (*p, "velocity")
+            vel = r.table(m["velocity"], q, {"x", "y"})
+            motion = ConstantVelocity(r.number(vel, q, "x") if "x" in vel else None,
+                                      r.number(vel, q, "y") if "y" in vel else None)
+        else:
+            motion = _time_table(r, m["displacement"], (*p, "displacement"),
+                                 f"prescribe_motion of {h}")
         kwargs = {}
         if "penalty" in m:
             kwargs["penalty"] = r.number(m, p, "penalty", positive=True)
@@ -498,9 +532,31 @@ def load_scene(path) -> LoadedScene:
         h = block_of(ld, p)
         if "point" not in ld or "force" not in ld:
             raise r.error(p, "needs point and force")
-        r.call(p, scene.add_point_load, h, r.pair(ld, p, "point", None),
-               r.pair(ld, p, "force", None))
+        if isinstance(ld["force"], dict):
+            force = _time_table(r, ld["force"], (*p, "force"), f"point load on {h}",
+                                both=True)
+        else:
+            force = r.pair(ld, p, "force", None)
+        r.call(p, scene.add_point_load, h, r.pair(ld, p, "point", None), force)
         effects.append(f"point load on {h}")
+
+    damping = data.get("damping", [])
+    for i, dm in enumerate([damping] if isinstance(damping, dict) else
+                           _array(r, data, "damping")):
+        p = ("damping",) if isinstance(damping, dict) else ("damping", i)
+        r.table(dm, p, {"mass", "stiffness", "blocks"})
+        names = dm.get("blocks")
+        if names is not None:
+            if not isinstance(names, list):
+                raise r.error((*p, "blocks"), "must be a list of block names")
+            for name in names:
+                if name not in blocks:
+                    raise r.error((*p, "blocks"), f"no block {name!r}")
+        r.call(p, scene.set_damping, mass=r.number(dm, p, "mass", default=0.0),
+               stiffness=r.number(dm, p, "stiffness", default=0.0),
+               blocks=None if names is None else [blocks[n] for n in names])
+    if scene.damping_coefficients() is not None:
+        effects.append("damping")
 
     p = ("simulation",)
     sim = r.table(data.get("simulation", {}), p, {
@@ -523,12 +579,17 @@ def load_scene(path) -> LoadedScene:
             settings[k] = sim[k]
     duration = r.number(sim, p, "duration", positive=True) if "duration" in sim else None
 
-    out = r.table(data.get("output", {}), ("output",), {"dir", "prefix", "every"})
+    out = r.table(data.get("output", {}), ("output",), {"dir", "prefix", "every", "checkpoint",
+                                                        "checkpoint_every"})
     out_dir = base / out["dir"] if "dir" in out else None
     prefix = str(out.get("prefix", path.stem))
-    every = int(r.number(out, ("output",), "every", default=1.0, positive=True))
+    every = _count(r, out, ("output",), "every", 1)
+    checkpoint = out.get("checkpoint")
+    if checkpoint is not None and (not isinstance(checkpoint, str) or not checkpoint):
+        raise r.error(("output", "checkpoint"), f"must be a file name, got {checkpoint!r}")
     loaded = LoadedScene(scene, blocks, solver, settings, duration, out_dir, prefix, every,
-                         path, effects)
+                         path, effects, checkpoint,
+                         _count(r, out, ("output",), "checkpoint_every", 100))
     # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
     r.call(p, loaded.simulation)
     return loaded
@@ -540,6 +601,35 @@ def _array(r, data, key, path=None):
     if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
         raise r.error(path, f"must be an array of tables ([[{'.'.join(map(str, path))}]])")
     return value
+
+
+def _count(r, data, path, key, default):
+    """A whole number of at least 1."""
+    v = data.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int) or v < 1:
+        raise r.error((*path, key), f"must be a whole number of at least 1, got {v!r}")
+    return v
+
+
+def _time_table(r, spec, path, name, both=False):
+    """A :class:`dda.effects.TimeTable` from ``{times, x, y}`` or ``{times, values}``; with
+    ``both`` a direction left out is zero (a force), else it is free (a motion)."""
+    from dda.effects import TimeTable
+
+    r.table(spec, path, {"times", "x", "y", "values"})
+    if "times" not in spec:
+        raise r.error(path, "needs times = [...] and x = [...], y = [...] or values")
+    if "values" in spec:
+        if "x" in spec or "y" in spec:
+            raise r.error(path, "give values = [[x, y], ...] or x and y columns, not both")
+        values = r.points(spec, path, "values")
+        x, y = values[:, 0], values[:, 1]
+    else:
+        x, y = spec.get("x"), spec.get("y")
+        if both and (x is None) != (y is None):
+            x = [0.0] * len(spec["times"]) if x is None else x
+            y = [0.0] * len(spec["times"]) if y is None else y
+    return r.call(path, TimeTable, spec["times"], x, y, name=name)
 
 
 def _bool(r, data, path, key):
