@@ -4,6 +4,7 @@ scene.
     dda run SCENE.toml|SCRIPT.py|RUN.ckpt [--out DIR] [--duration S] [--no-progress]
     dda demo [--out DIR]
     dda render OUT/case.pvd [--png FILE] [--gif FILE] [--mp4 FILE] [--field NAME] [--frame N]
+                            [--relative-to ID]
     dda info SCENE.toml
 """
 
@@ -93,10 +94,14 @@ def cmd_render(args):
     if not (args.png or args.gif or args.mp4):
         args.png = str(Path(args.pvd).with_suffix(".png"))
     if args.png:
-        print(f"wrote {plot.render_frame(args.pvd, args.png, frame=args.frame, field=args.field)}")
+        png = plot.render_frame(args.pvd, args.png, frame=args.frame, field=args.field,
+                                relative_to=args.relative_to)
+        print(f"wrote {png}")
     for movie in (args.gif, args.mp4):
         if movie:
-            print(f"wrote {plot.animate(args.pvd, movie, field=args.field, fps=args.fps)}")
+            made = plot.animate(args.pvd, movie, field=args.field, fps=args.fps,
+                                relative_to=args.relative_to)
+            print(f"wrote {made}")
     return 0
 
 
@@ -168,6 +173,9 @@ def main(argv=None) -> int:
     p.add_argument("--gif", help="animation, GIF")
     p.add_argument("--mp4", help="animation, MP4 (H.264; needs dda[vis])")
     p.add_argument("--field", default="displacement", help="cell field to colour by")
+    p.add_argument("--relative-to", type=int, metavar="ID", help="colour displacement, "
+                   "velocity or rotation relative to the block with this block_id (a "
+                   "shaking table's, say)")
     p.add_argument("--frame", type=int, default=-1, help="frame of the PNG (default last)")
     p.add_argument("--fps", type=float, default=10.0)
     p.set_defaults(func=cmd_render)

@@ -14,7 +14,17 @@ import numpy as np
 __all__ = ["history", "read_pvd", "render_frame", "animate"]
 
 
-def history(result, blocks=None, path=None, title=None):
+def _reference_block(result, relative_to):
+    """The block displacements are measured from: ``"auto"`` takes the first shaken block
+    (a shaking table: what matters is how far the blocks move on it), else none."""
+    scene = result.scene
+    if relative_to == "auto":
+        shaken = [s.block for s in scene._shakes]
+        return scene.blocks[shaken[0]] if shaken else None
+    return None if relative_to is None else scene.block(relative_to)
+
+
+def history(result, blocks=None, path=None, title=None, relative_to="auto"):
     """Plot a run's histories: block displacement, joint forces and contact states over time.
 
     Parameters
@@ -25,12 +35,17 @@ def history(result, blocks=None, path=None, title=None):
     path : str or Path, optional
         Write the figure there (PNG, PDF, SVG by suffix) and close it.
     title : str, optional
+    relative_to : Block, name, index, None or "auto"
+        Plot displacements relative to this block's. The default, ``"auto"``, takes the first
+        shaken block when the scene has one (so a stack on a shaking table shows how far it
+        slides on the table, not the table's own travel), else plots them from the start.
 
     Returns
     -------
     matplotlib.figure.Figure
         Three panels: |centroid displacement| of each block, the normal and shear force of
-        the joints those blocks carry, and the number of open-to-closed contacts per step.
+        the joints those blocks carry, and the number of contacts open (tracked), sticking
+        and slipping at each step.
     """
     import matplotlib
 
@@ -39,17 +54,23 @@ def history(result, blocks=None, path=None, title=None):
     import matplotlib.pyplot as plt
 
     scene = result.scene
+    ref = _reference_block(result, relative_to)
+    origin = result.displacement(ref) if ref is not None else 0.0
+
+    def moved(b):
+        return result.displacement(b) - origin
+
     if blocks is None:
-        moved = [b for b in scene.blocks
-                 if np.abs(result.displacement(b)).max(initial=0.0) > 0.0]
-        blocks = moved[:8]
+        blocks = [b for b in scene.blocks
+                  if b != ref and np.abs(moved(b)).max(initial=0.0) > 0.0][:8]
     blocks = [scene.block(b) for b in blocks]
     t = result.time
     fig, axes = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
     for b in blocks:
-        u = result.displacement(b)
+        u = moved(b)
         axes[0].plot(t, 1e3 * np.hypot(u[:, 0], u[:, 1]), label=b.name)
-    axes[0].set_ylabel("displacement (mm)")
+    axes[0].set_ylabel("displacement (mm)" if ref is None else
+                       f"displacement relative\nto {ref.name} (mm)")
     if blocks:
         axes[0].legend(fontsize="small", ncol=2)
     plotted = 0
@@ -67,7 +88,8 @@ def history(result, blocks=None, path=None, title=None):
         axes[1].legend(fontsize="small", ncol=2)
     st = result.stats
     if len(st):
-        axes[2].step(st.time, st.closed, where="post", label="closed")
+        axes[2].step(st.time, st.closed - st.sliding, where="post", label="stick")
+        axes[2].step(st.time, st.sliding, where="post", label="slip")
         axes[2].step(st.time, st.contacts - st.closed, where="post", label="open (tracked)")
         axes[2].legend(fontsize="small")
     axes[2].set_ylabel("contacts")
@@ -107,11 +129,26 @@ def _pyvista():
     return pv
 
 
-def _blocks_mesh(pv, file, field):
+_RELATIVE_FIELDS = ("displacement", "velocity", "rotation")
+
+
+def _blocks_mesh(pv, file, field, relative_to=None):
     mesh = pv.read(str(file))
     if "kind" in mesh.cell_data:
         mesh = mesh.extract_cells(np.flatnonzero(np.asarray(mesh.cell_data["kind"]) == 0))
-    values = np.asarray(mesh.cell_data[field])
+    if field not in mesh.cell_data:
+        names = sorted(k for k in mesh.cell_data if k not in ("kind", "vtkOriginalCellIds"))
+        raise ValueError(f"{file} has no block field {field!r} (there are: {', '.join(names)})")
+    values = np.asarray(mesh.cell_data[field], dtype=float)
+    if relative_to is not None:
+        if field not in _RELATIVE_FIELDS:
+            raise ValueError(f"relative_to goes with {', '.join(_RELATIVE_FIELDS)}, not "
+                             f"{field!r}")
+        ids = np.asarray(mesh.cell_data["block_id"])
+        hit = np.flatnonzero(ids == relative_to)
+        if len(hit) == 0:
+            raise ValueError(f"{file} has no block with block_id {relative_to}")
+        values = values - values[hit[0]]
     if values.ndim == 2:
         values = np.linalg.norm(values, axis=1)
     mesh.cell_data["shown"] = values
@@ -121,25 +158,29 @@ def _blocks_mesh(pv, file, field):
 class _Frames:
     """A plotter with a fixed 2D camera and colour range over a series of frames."""
 
-    def __init__(self, files, field, size):
+    def __init__(self, files, field, size, relative_to=None):
         self.pv = _pyvista()
         self.field = field
-        meshes = [_blocks_mesh(self.pv, f, field) for f in (files[0], files[-1])]
+        self.relative_to = relative_to
+        meshes = [_blocks_mesh(self.pv, f, field, relative_to) for f in (files[0], files[-1])]
         lo = np.min([m.bounds[::2] for m in meshes], axis=0)
         hi = np.max([m.bounds[1::2] for m in meshes], axis=0)
         self.bounds = (lo, hi)
         top = max(float(np.nanmax(m.cell_data["shown"])) for m in meshes)
         self.clim = (0.0, top if top > 0 else 1.0)
         self.size = size
+        self.title = f"|{field}|" + ("" if relative_to is None else
+                                      f" relative to block {relative_to}")
 
     def image(self, file, time):
         pv = self.pv
-        mesh = _blocks_mesh(pv, file, self.field)
+        mesh = _blocks_mesh(pv, file, self.field, self.relative_to)
         p = pv.Plotter(off_screen=True, window_size=self.size)
         p.set_background("white")
-        p.add_mesh(mesh, scalars="shown", clim=self.clim, cmap="viridis", show_edges=True,
-                   edge_color="black", scalar_bar_args={"title": f"|{self.field}|",
-                                                        "color": "black"})
+        p.add_mesh(mesh, scalars="shown", clim=self.clim, cmap="viridis",
+                   scalar_bar_args={"title": self.title, "color": "black"})
+        # the polygons' own edges (show_edges would draw the triangles they render as)
+        p.add_mesh(mesh.extract_all_edges(), color="black", line_width=1)
         p.add_text(f"t = {time:.4g} s", color="black", font_size=10)
         lo, hi = self.bounds
         centre = 0.5 * (lo + hi)
@@ -154,14 +195,19 @@ class _Frames:
 
 
 def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
-                 size=(1024, 768)) -> Path:
+                 size=(1024, 768), relative_to: int | None = None) -> Path:
     """Render one frame of a PVD series (default the last) to a PNG file, blocks coloured by
-    the magnitude of a cell field (``displacement``, ``velocity``, ``stress``, ...)."""
+    the magnitude of a cell field (``displacement``, ``velocity``, ``stress``, ...).
+
+    ``relative_to`` (a block index, the ``block_id`` of the VTU cells) colours
+    displacement, velocity or rotation relative to that block's: on a shaking table, how
+    far each block has moved on the table.
+    """
     from PIL import Image
 
     entries = read_pvd(pvd)
     time, file = entries[frame]
-    frames = _Frames([file, file], field, size)
+    frames = _Frames([file, file], field, size, relative_to)
     png = Path(png)
     png.parent.mkdir(parents=True, exist_ok=True)
     Image.fromarray(frames.image(file, time)).save(png)
@@ -169,11 +215,12 @@ def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
 
 
 def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800, 600),
-            max_frames: int | None = None) -> Path:
+            max_frames: int | None = None, relative_to: int | None = None) -> Path:
     """Animate a PVD series to a GIF (Pillow) or an MP4 (H.264 through imageio-ffmpeg).
 
     ``max_frames`` keeps that many frames evenly spread over the series. An MP4's frame
-    size is rounded up to whole 16-pixel blocks, as the codec needs.
+    size is rounded up to whole 16-pixel blocks, as the codec needs. ``field`` and
+    ``relative_to`` as in :func:`render_frame`.
     """
     out = Path(out)
     kind = out.suffix.lower()
@@ -191,7 +238,7 @@ def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800,
     if max_frames is not None and len(entries) > max_frames:
         pick = np.unique(np.linspace(0, len(entries) - 1, max_frames).round().astype(int))
         entries = [entries[i] for i in pick]
-    frames = _Frames([entries[0][1], entries[-1][1]], field, size)
+    frames = _Frames([entries[0][1], entries[-1][1]], field, size, relative_to)
     images = [frames.image(f, t) for t, f in entries]
     out.parent.mkdir(parents=True, exist_ok=True)
     if kind == ".gif":

@@ -36,7 +36,8 @@ class StepStats:
     """Per-step statistics as arrays: ``stats.wall_time``, ``stats["open_close_passes"]`` ...
 
     Fields: time, dt, iterations (legacy: linear solves; Newton: iterations after OPEN-CLOSE),
-    open_close_passes, contacts (vertex-edge pairs tracked), closed (closed contacts), retries
+    open_close_passes, contacts (vertex-edge pairs tracked), closed (closed contacts: sticking
+    or sliding), sliding (closed contacts that slip at the end of the step), retries
     (failed tries before the step went through), wall_time (s), solves (linear solves, retries
     included), unknowns (size of the step's linear system: 6 per free block, 3 per rigid
     one; fixed and shaken blocks have none), pairs (block pairs whose bounding boxes came
@@ -47,7 +48,8 @@ class StepStats:
     step and ``cuts`` every dt cut as (time, dt, reason).
     """
 
-    FIELDS = ("time", "dt", "iterations", "open_close_passes", "contacts", "closed", "retries",
+    FIELDS = ("time", "dt", "iterations", "open_close_passes", "contacts", "closed", "sliding",
+              "retries",
               "wall_time", "solves", "unknowns", "pairs")
     FIELDS += tuple(f"{name}_time" for name in SECTIONS)
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from dda import geometry
 from dda._checks import finite_number
-from dda.contact.contacts import OPEN, ContactSet, carry_over
+from dda.contact.contacts import OPEN, SLIP, ContactSet, carry_over
 from dda.contact.detection import CandidateContacts, VertexTopology, narrow_phase
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.kinematics import contact_geometry
@@ -631,7 +631,8 @@ class Simulation:
         result.stats.append(
             time=new.time, dt=dt, iterations=sol.iterations,
             open_close_passes=sol.open_close_passes, contacts=len(c),
-            closed=int(np.count_nonzero(c.state != OPEN)), retries=tries,
+            closed=int(np.count_nonzero(c.state != OPEN)),
+            sliding=int(np.count_nonzero(c.state == SLIP)), retries=tries,
             wall_time=_time.perf_counter() - start, solves=profile.solves,
             unknowns=sol.unknowns, pairs=sol.pairs,
             residual_norms=sol.residual_norms,

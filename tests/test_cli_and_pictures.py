@@ -114,6 +114,50 @@ def test_history_plot_is_drawn(series, tmp_path):
     assert (pixels < 200).any(axis=2).sum() > 2000
 
 
+def test_history_plots_the_slide_on_the_table_and_the_contact_states(series):
+    scene, pvd = series
+    result = dda.load_scene(scene).run(duration=0.1)
+    fig = plot.history(result)
+    disp, forces, states = fig.axes
+    # on a shaken base the blocks' displacement is measured from the table's
+    assert disp.get_ylabel() == "displacement relative\nto base (mm)"
+    (line,) = disp.lines
+    slide = result.displacement("top") - result.displacement("base")
+    np.testing.assert_allclose(line.get_ydata(), 1e3 * np.hypot(*slide.T))
+    assert 0.1 < line.get_ydata()[-1] < 0.9 * 1e3 * np.hypot(*result.displacement("top")[-1])
+    absolute = plot.history(result, relative_to=None).axes[0]
+    assert absolute.get_ylabel() == "displacement (mm)" and len(absolute.lines) == 2
+    # 6 m/s2 on phi 20 (tan 20 g = 3.6 m/s2): the block's two contacts slip, then stick
+    stick, slip, opened = (ln.get_ydata() for ln in states.lines)
+    st = result.stats
+    np.testing.assert_array_equal(np.asarray(stick) + slip, st.closed)
+    np.testing.assert_array_equal(opened, st.contacts - st.closed)
+    assert st.sliding.max() == 2 and (st.sliding == 0).any()
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def test_frames_relative_to_a_block(series):
+    from dda.plot import _blocks_mesh, _pyvista
+
+    scene, pvd = series
+    last = plot.read_pvd(pvd)[-1][1]
+    pv = _pyvista()
+    mesh = _blocks_mesh(pv, last, "displacement", relative_to=0)
+    u = np.asarray(mesh.cell_data["displacement"])
+    ids = np.asarray(mesh.cell_data["block_id"]).astype(int)
+    shown = np.asarray(mesh.cell_data["shown"])
+    np.testing.assert_allclose(shown, np.linalg.norm(u - u[ids == 0][0], axis=1))
+    assert shown[ids == 0][0] == 0.0 and shown[ids == 1][0] > 0.0
+    with pytest.raises(ValueError, match="relative_to goes with"):
+        _blocks_mesh(pv, last, "stress", relative_to=0)
+    with pytest.raises(ValueError, match="no block field 'strain'"):
+        _blocks_mesh(pv, last, "strain")
+    with pytest.raises(ValueError, match="no block with block_id 7"):
+        _blocks_mesh(pv, last, "velocity", relative_to=7)
+
+
 def test_info_describes_the_scene(series, capsys):
     scene, pvd = series
     assert main(["info", str(scene)]) == 0
