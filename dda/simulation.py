@@ -42,7 +42,7 @@ SEARCH_FACTOR = 2.5
 # times a step is tried again with a wider search before its dt is cut instead
 MAX_WIDENINGS = 2
 # layout of the checkpoint files written by Simulation.run
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2  # 2: Simulation.damping
 
 
 class SimulationError(RuntimeError):

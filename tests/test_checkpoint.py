@@ -111,3 +111,14 @@ def test_resume_and_run_errors(tmp_path):
         cs.simulation().run()
     with pytest.raises(ValueError, match="checkpoint_every"):
         cs.simulation().run(0.01, checkpoint=tmp_path / "c.ckpt", checkpoint_every=0)
+
+
+def test_a_checkpoint_of_an_older_layout_is_refused_clearly(tmp_path):
+    import pickle
+
+    from dda.simulation import CHECKPOINT_VERSION
+
+    old = tmp_path / "old.ckpt"
+    old.write_bytes(pickle.dumps({"version": CHECKPOINT_VERSION - 1, "simulation": None}))
+    with pytest.raises(ValueError, match="not a checkpoint of this version of dda"):
+        dda.Simulation.resume(old)
