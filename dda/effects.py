@@ -65,6 +65,8 @@ class TimeTable:
                 c = np.asarray(col, dtype=float)
             except (TypeError, ValueError):
                 raise ValueError(f"{name}: {label} must be a list of numbers") from None
+            if c.ndim != 1:
+                raise ValueError(f"{name}: {label} must be a list of numbers, one per time")
             if c.shape != t.shape:
                 raise ValueError(f"{name}: {label} has {c.size} values for {len(t)} times")
             if not np.all(np.isfinite(c)):

@@ -341,6 +341,10 @@ def test_the_file_format_covers_every_api_setting():
     ("mass = 2.0", "mass = -2.0", "damping[0]", "mass must not be negative"),
     ("checkpoint_every = 10", "checkpoint_every = 0", "output.checkpoint_every",
      "at least 1"),
+    ("force = { times = [0.0, 0.02], x = [0.0, 3e4] }", "force = { times = 5, x = [0.0] }",
+     "load[0].force", "times must be a 1-D list"),
+    ("force = { times = [0.0, 0.02], x = [0.0, 3e4] }", "force = { times = [0.0], x = 5 }",
+     "load[0].force", "x must be a list of numbers"),
 ])
 def test_table_errors_name_the_line_and_the_key(tmp_path, change, line, key, words):
     text = TABLES.replace(change, line, 1)

@@ -626,9 +626,10 @@ def _time_table(r, spec, path, name, both=False):
         x, y = values[:, 0], values[:, 1]
     else:
         x, y = spec.get("x"), spec.get("y")
-        if both and (x is None) != (y is None):
-            x = [0.0] * len(spec["times"]) if x is None else x
-            y = [0.0] * len(spec["times"]) if y is None else y
+        if both and (x is None) != (y is None):  # a force: the direction left out is zero
+            given = x if x is not None else y
+            zeros = [0.0] * len(given) if isinstance(given, list) else None
+            x, y = (zeros, y) if x is None else (x, zeros)
     return r.call(path, TimeTable, spec["times"], x, y, name=name)
 
 
