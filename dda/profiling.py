@@ -20,6 +20,9 @@ assembly
     building the global matrix and right-hand side (and residual vectors)
 solve
     factorization and solution of the linear system
+guard
+    the penetration guard: every vertex inside another block at the end of the step, found
+    geometrically and checked against the closed contacts (:mod:`dda.contact.penetration`)
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ from time import perf_counter
 
 __all__ = ["SECTIONS", "StepProfile", "section"]
 
-SECTIONS = ("detection", "contact_element", "return_map", "assembly", "solve")
+SECTIONS = ("detection", "contact_element", "return_map", "assembly", "solve", "guard")
 
 _active: ContextVar[StepProfile | None] = ContextVar("dda_step_profile", default=None)
 

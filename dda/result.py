@@ -41,16 +41,18 @@ class StepStats:
     (failed tries before the step went through), wall_time (s), solves (linear solves, retries
     included), unknowns (size of the step's linear system: 6 per free block, 3 per rigid
     one; fixed and shaken blocks have none), pairs (block pairs whose bounding boxes came
-    within the contact search distance: the only pairs the narrow phase looks at) and the
-    seconds spent in each part of the step (retries included):
-    detection_time, contact_element_time, return_map_time, assembly_time, solve_time (see
-    :mod:`dda.profiling`). ``residual_norms`` holds the Newton out-of-balance norms of every
-    step and ``cuts`` every dt cut as (time, dt, reason).
+    within the contact search distance: the only pairs the narrow phase looks at),
+    penetration (the deepest vertex inside another block at the end of the step, m, found
+    geometrically by the penetration guard), spring_penetration (the deepest closed contact's
+    spring penetration ``-t_n / p_n``, m) and the seconds spent in each part of the step
+    (retries included): detection_time, contact_element_time, return_map_time, assembly_time,
+    solve_time, guard_time (see :mod:`dda.profiling`). ``residual_norms`` holds the Newton
+    out-of-balance norms of every step and ``cuts`` every dt cut as (time, dt, reason).
     """
 
     FIELDS = ("time", "dt", "iterations", "open_close_passes", "contacts", "closed", "sliding",
               "retries",
-              "wall_time", "solves", "unknowns", "pairs")
+              "wall_time", "solves", "unknowns", "pairs", "penetration", "spring_penetration")
     FIELDS += tuple(f"{name}_time" for name in SECTIONS)
 
     def __init__(self):

@@ -21,9 +21,16 @@ import numpy as np
 from dda import geometry
 from dda._checks import finite_number
 from dda.contact.contacts import OPEN, SLIP, ContactSet, carry_over
-from dda.contact.detection import CandidateContacts, VertexTopology, narrow_phase
+from dda.contact.detection import (
+    CandidateContacts,
+    VertexTopology,
+    bounding_boxes,
+    broad_phase,
+    narrow_phase,
+)
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.kinematics import contact_geometry
+from dda.contact.penetration import untracked_depth, vertex_penetrations
 from dda.profiling import StepProfile, section
 from dda.result import Frame, Result
 from dda.scene import Scene
@@ -42,7 +49,7 @@ SEARCH_FACTOR = 2.5
 # times a step is tried again with a wider search before its dt is cut instead
 MAX_WIDENINGS = 2
 # layout of the checkpoint files written by Simulation.run
-CHECKPOINT_VERSION = 2  # 2: Simulation.damping
+CHECKPOINT_VERSION = 3  # 2: Simulation.damping; 3: the penetration guard
 
 
 class SimulationError(RuntimeError):
@@ -68,6 +75,8 @@ class _Committed:
     known_u: np.ndarray
     last_move: float
     centroid: np.ndarray
+    # the deepest untracked penetration left in this state, in penetration tolerances
+    untracked: float = 0.0
 
 
 class Simulation:
@@ -95,6 +104,16 @@ class Simulation:
         cut, as is one whose OPEN-CLOSE iteration does not settle or whose Newton iteration
         does not converge; dt grows back (doubling) after ``GROW_AFTER`` quiet steps. Every
         cut is in ``result.stats.cuts`` as (time, dt, reason).
+    penetration_tolerance : float
+        The penetration guard: after every step, before it is committed, every vertex that
+        lies inside another block is found geometrically (:mod:`dda.contact.penetration`).
+        One that no closed contact holds at (at least) its depth, give or take this fraction
+        of the thinner block's half-width (``2 area / perimeter``: half a square's side), is
+        an untracked penetration: the step is refused and tried again with a smaller dt, and
+        a run that cannot get past it stops with a :class:`SimulationError` naming the
+        vertex, the two blocks, the depth and the time. ``result.stats.penetration`` is the
+        deepest vertex found per step, ``result.stats.spring_penetration`` the deepest
+        closed spring.
     output : writer, optional
         For example ``dda.io.VTUWriter("out/case")``; can also be given to :meth:`run`.
 
@@ -113,7 +132,7 @@ class Simulation:
     def __init__(self, scene: Scene, dt: float, solver: NonlinearSolver | None = None,
                  analysis: str = "dynamic", velocity_carry: float = 1.0,
                  max_open_close: int = 12, record_every: int = 1, output=None,
-                 max_displacement_ratio: float = 0.25):
+                 max_displacement_ratio: float = 0.25, penetration_tolerance: float = 0.01):
         if not isinstance(scene, Scene):
             raise TypeError(f"Simulation: scene must be a dda.Scene, got {scene!r}")
         self.dt = finite_number("dt", dt, positive=True, where="Simulation")
@@ -134,6 +153,8 @@ class Simulation:
             raise ValueError("Simulation: record_every must be at least 1")
         self.max_displacement_ratio = finite_number(
             "max_displacement_ratio", max_displacement_ratio, positive=True, where="Simulation")
+        self.penetration_tolerance = finite_number(
+            "penetration_tolerance", penetration_tolerance, positive=True, where="Simulation")
         scene.validate()
         self.scene = scene
         self.solver = solver
@@ -353,7 +374,8 @@ class Simulation:
                         2.0 * self._deepest_penetration() + min(d0, cap))
         if self.n_blocks > 1:
             with section("detection"):
-                cand = narrow_phase(st.x, self.topo, d0, pen_limit)
+                cand = narrow_phase(st.x, self.topo, d0, pen_limit,
+                                    self._pairs(st.x, max(d0, pen_limit)))
                 contacts, fresh, geom = carry_over(st.contacts, cand, st.x, self.topo.nxt,
                                                    self.topo.prv, self.n_blocks)
         else:  # a single block: nothing to detect
@@ -399,6 +421,13 @@ class Simulation:
                           f"step, more than max_displacement_ratio {self.max_displacement_ratio:g}"
                           f" of its size {self.size[worst]:.3g} m")
             return None, sol
+        x_new = st.x + move
+        with section("guard"):
+            refused = self._guard(x_new, sol, self.joint_pn[joint])
+        if refused:
+            sol.converged = False
+            sol.reason = refused
+            return None, sol
         vel = np.where(self.free[:, None], updated_velocity(d, v_eff, dt), 0.0)
         if self.rigid is not None:
             vel[self.rigid, 3:] = 0.0
@@ -417,14 +446,56 @@ class Simulation:
             spring_points = spring_points + geometry.vertex_displacements(
                 spring_points, centroid[self.pc_block], d[self.pc_block])
         new = _Committed(
-            time=t1, x=st.x + move, velocity=vel, stress=stress,
+            time=t1, x=x_new, velocity=vel, stress=stress,
             rotation=st.rotation + d[:, 2], contacts=sol.contacts, load_points=load_points,
             spring_points=spring_points,
-            known_u=known_u, last_move=largest,
+            known_u=known_u, last_move=largest, untracked=sol.untracked,
             # a step maps each block affinely, which carries its centroid by (u0, v0)
             centroid=centroid + d[:, :2],
         )
         return new, sol
+
+    def _pairs(self, x, margin) -> np.ndarray:
+        """Block pairs whose boxes, grown by ``margin``, overlap, less those of two blocks
+        whose motion is known (fixed, shaken, moved): a contact between them acts on no
+        unknown, and its spring (two fixed blocks built touching or overlapping) would only
+        hold fictitious energy."""
+        pairs = broad_phase(bounding_boxes(x, self.offsets), margin)
+        return pairs[self.free[pairs[:, 0]] | self.free[pairs[:, 1]]]
+
+    def _guard(self, x_new, sol, normal_penalty) -> str:
+        """The penetration guard on a step's trial: '' when every vertex inside another block
+        is held by a closed contact at its depth, else why the step is refused.
+
+        Sets ``sol.penetration`` (the deepest vertex inside another block, m) and
+        ``sol.spring_penetration`` (the deepest closed spring, m).
+        """
+        if self.n_blocks < 2:
+            return ""
+        pen = vertex_penetrations(x_new, self.topo, pairs=self._pairs(x_new, 0.0))
+        c = sol.contacts
+        closed = c.state != OPEN
+        sol.penetration = pen.deepest
+        sol.spring_penetration = float(np.max(-c.t_n[closed] / normal_penalty[closed],
+                                              initial=0.0))
+        if len(pen) == 0:
+            return ""
+        tol = self.penetration_tolerance * np.minimum(
+            self.thickness[self.topo.block[pen.vertex]], self.thickness[pen.block])
+        ratio = untracked_depth(pen, c, normal_penalty, self.topo) / tol
+        sol.untracked = float(np.max(ratio))
+        bad = ratio > 1.0
+        if not bad.any():
+            return ""
+        i = int(np.argmax(ratio))
+        v = int(pen.vertex[i])
+        j = int(self.topo.block[v])
+        k = int(pen.block[i])
+        local = v - int(self.offsets[j])
+        return (f"untracked penetration: vertex {local} of {self.scene.blocks[j]} "
+                f"(at {x_new[v, 0]:.6g}, {x_new[v, 1]:.6g}) is {pen.depth[i]:.3g} m inside "
+                f"{self.scene.blocks[k]}, and no closed contact holds it "
+                f"(tolerance {tol[i]:.3g} m)")
 
     def _snapshots(self):
         return [s.history.snapshot() for s in self.shakes]
@@ -615,6 +686,15 @@ class Simulation:
             result.stats.cuts.append((self.state.time, dt, sol.reason))
             self._dt_now = dt / 2.0
             self._good_steps = 0
+            if sol.untracked > 1.0 and self.state.untracked > 0.5:
+                # the vertex is already half the tolerance in, untracked, at the start of the
+                # step: any step that moves it on is refused, and smaller ones only creep
+                raise SimulationError(
+                    f"the run cannot go on at t = {self.state.time:.6g} s: {sol.reason}; it "
+                    f"was already {self.state.untracked:.2g} tolerances deep, untracked, at the "
+                    "start of the step, so a smaller dt cannot help (contact detection missed "
+                    "it: please report the scene)"
+                )
             if tries > MAX_CUTS:
                 raise SimulationError(
                     f"the run cannot go on at t = {self.state.time:.6g} s: {sol.reason} "
@@ -634,7 +714,8 @@ class Simulation:
             closed=int(np.count_nonzero(c.state != OPEN)),
             sliding=int(np.count_nonzero(c.state == SLIP)), retries=tries,
             wall_time=_time.perf_counter() - start, solves=profile.solves,
-            unknowns=sol.unknowns, pairs=sol.pairs,
+            unknowns=sol.unknowns, pairs=sol.pairs, penetration=sol.penetration,
+            spring_penetration=sol.spring_penetration,
             residual_norms=sol.residual_norms,
             **{f"{name}_time": sec for name, sec in profile.seconds.items()},
         )

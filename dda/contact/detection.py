@@ -22,10 +22,13 @@ Of several edges of one block that pass for the same vertex, the one with the la
 preferred (the least deep: at a corner where four blocks meet, a vertex sliding along one
 joint past the corner must not be taken as deep behind the other joint's line), then one whose
 foot lies on the edge, then the one whose outward normal is most opposed to the vertex's
-outward bisector. A vertex-vertex case (the foot at the
-end of the edge, the two vertices within the search distance) shows up as two mirrored pairs,
-P on an edge at Q and Q on an edge at P; only one is kept: the one whose foot lies on its
-edge, else the better opposed one.
+outward bisector. That choice is right where the block is convex; at a reflex (concave)
+vertex of the block the solid is the union of the two edges' half-planes, and a vertex in the
+corner is near both: the edge across a reflex vertex from the chosen one is kept as well (Shi's
+rule for a convex vertex entering a concave angle: two vertex-edge contacts). A vertex-vertex
+case (the foot at the end of the edge, the two vertices within the search distance) shows up
+as two mirrored pairs, P on an edge at Q and Q on an edge at P; only one is kept: the one whose
+foot lies on its edge, else the better opposed one.
 """
 
 from __future__ import annotations
@@ -62,6 +65,14 @@ class VertexTopology:
         prv[nxt] = np.arange(len(nxt))
         block = np.repeat(np.arange(len(counts)), counts)
         return cls(offsets=offsets, block=block, nxt=nxt, prv=prv)
+
+    def reflex(self, x: np.ndarray) -> np.ndarray:
+        """Whether each vertex is reflex (its interior angle above 180 degrees by more than
+        round-off; a straight vertex between collinear edges is not)."""
+        a = x[self.prv] - x
+        b = x[self.nxt] - x
+        cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        return cross > 1e-9 * np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
 
     def convex_and_bisector(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Convexity of every vertex and its outward unit bisector."""
@@ -227,8 +238,16 @@ def narrow_phase(
     )
     first = np.ones(len(vertex), dtype=bool)
     first[1:] = (vertex[1:] != vertex[:-1]) | (kblock[1:] != kblock[:-1])
+    # at a reflex vertex of block k the solid is the union of its two edges' half-planes, so
+    # a vertex near that corner is near both edges at once: keep the edge across the corner
+    # from the chosen one too (a block sliding into a notch would otherwise lose its seat on
+    # the face as soon as the notch's wall becomes the least deep edge)
+    chosen = edge[first][np.cumsum(first) - 1]
+    reflex = topo.reflex(x)
+    keep = first | ((edge == topo.nxt[chosen]) & reflex[topo.nxt[chosen]]) | (
+        (edge == topo.prv[chosen]) & reflex[chosen])
     vertex, edge, xi, kblock, score, p1, on_edge = (
-        a[first] for a in (vertex, edge, xi, kblock, score, p1, on_edge)
+        a[keep] for a in (vertex, edge, xi, kblock, score, p1, on_edge)
     )
 
     # vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)
@@ -241,8 +260,11 @@ def narrow_phase(
         b = np.maximum(vertex[idx], near_end[idx])
         order = np.lexsort((vertex[idx], -score[idx], ~on_edge[idx], b, a))
         a, b, idx = a[order], b[order], idx[order]
-        dup = np.zeros(len(idx), dtype=bool)
-        dup[1:] = (a[1:] == a[:-1]) & (b[1:] == b[:-1])
+        head = np.ones(len(idx), dtype=bool)
+        head[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1])
+        kept_vertex = vertex[idx][head][np.cumsum(head) - 1]
+        # only the mirror image goes: the same vertex in a reflex corner keeps both edges
+        dup = ~head & (vertex[idx] != kept_vertex)
         drop = np.zeros(len(vertex), dtype=bool)
         drop[idx[dup]] = True
         vertex, edge, kblock = vertex[~drop], edge[~drop], kblock[~drop]

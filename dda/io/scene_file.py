@@ -72,7 +72,8 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     duration = 1.0
     solver = "newton"                     # or "legacy"; tol and max_iter for newton
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
-                                          # record_every, max_displacement_ratio
+                                          # record_every, max_displacement_ratio,
+                                          # penetration_tolerance
 
     [output]
     prefix = "case"                       # files OUT/case_00000.vtu ... and OUT/case.pvd
@@ -561,7 +562,7 @@ def load_scene(path) -> LoadedScene:
     p = ("simulation",)
     sim = r.table(data.get("simulation", {}), p, {
         "dt", "duration", "solver", "tol", "max_iter", "analysis", "velocity_carry",
-        "max_open_close", "record_every", "max_displacement_ratio"})
+        "max_open_close", "record_every", "max_displacement_ratio", "penetration_tolerance"})
     solver_name = sim.get("solver", "newton")
     if solver_name == "newton":
         kw = {k: sim[k] for k in ("tol", "max_iter") if k in sim}
@@ -574,7 +575,7 @@ def load_scene(path) -> LoadedScene:
         raise r.error((*p, "solver"), f"must be 'newton' or 'legacy', got {solver_name!r}")
     settings = {"dt": r.number(sim, p, "dt", positive=True)}
     for k in ("analysis", "velocity_carry", "max_open_close", "record_every",
-              "max_displacement_ratio"):
+              "max_displacement_ratio", "penetration_tolerance"):
         if k in sim:
             settings[k] = sim[k]
     duration = r.number(sim, p, "duration", positive=True) if "duration" in sim else None

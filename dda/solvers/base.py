@@ -70,6 +70,9 @@ class StepSolution:
     search_hint: float = 0.0
     unknowns: int = 0
     pairs: int = 0
+    penetration: float = 0.0
+    spring_penetration: float = 0.0
+    untracked: float = 0.0  # the deepest untracked penetration, in penetration tolerances
 
 
 class NonlinearSolver(ABC):

@@ -1,0 +1,177 @@
+"""The penetration guard (issue 17, item 1): every vertex inside another block is found
+geometrically, and a step that leaves one untracked is refused."""
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.contact.contacts import OPEN, STICK, ContactSet
+from dda.contact.detection import VertexTopology
+from dda.contact.penetration import untracked_penetrations, vertex_penetrations
+from dda.materials import LinearElastic
+from tests.conftest import box
+
+ROCK = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+
+
+def stack(polys):
+    x = np.concatenate([np.asarray(p, float) for p in polys])
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polys])]).astype(np.int64)
+    return x, VertexTopology.from_offsets(offsets)
+
+
+def star(cx, cy, radii, turn):
+    """A star-shaped (generally non-convex) polygon, counter-clockwise."""
+    n = len(radii)
+    ang = turn + 2 * np.pi * np.arange(n) / n
+    return np.stack([cx + np.asarray(radii) * np.cos(ang), cy + np.asarray(radii) * np.sin(ang)],
+                    axis=1)
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.tuples(st.floats(0, 3), st.floats(0, 3),
+                          st.lists(st.floats(0.3, 1.0), min_size=3, max_size=9),
+                          st.floats(0, 6.3)), min_size=2, max_size=5))
+def test_vertex_penetrations_match_shapely(blocks):
+    polys = [star(cx, cy, r, t) for cx, cy, r, t in blocks]
+    x, topo = stack(polys)
+    pen = vertex_penetrations(x, topo)
+    found = {(int(v), int(k)): float(d) for v, k, d in zip(pen.vertex, pen.block, pen.depth)}
+    shapes = [shapely.Polygon(p) for p in polys]
+    expected = {}
+    for v, p in enumerate(x):
+        j = int(topo.block[v])
+        for k, s in enumerate(shapes):
+            if k == j:
+                continue
+            pt = shapely.Point(p)
+            depth = s.exterior.distance(pt)
+            if s.contains(pt) and depth > 1e-9:
+                expected[(v, k)] = depth
+    # points within round-off of a boundary may go either way; nothing deeper may differ
+    assert {key for key, d in expected.items() if d > 1e-7} <= set(found)
+    assert {key for key, d in found.items() if d > 1e-7} <= set(expected)
+    for key in set(found) & set(expected):
+        assert found[key] == pytest.approx(expected[key], rel=1e-9, abs=1e-12)
+
+
+def test_a_vertex_in_a_notch_is_inside_the_non_convex_block():
+    # a U-shaped block and a small box whose right side is in the U's right arm, 0.05 deep
+    u = [(0, 0), (3, 0), (3, 2), (2, 2), (2, 1), (1, 1), (1, 2), (0, 2)]
+    sq = box(1.5, 1.5, 0.55, 0.3)  # right corners at (2.05, 1.5) and (2.05, 1.8)
+    x, topo = stack([u, sq])
+    pen = vertex_penetrations(x, topo)
+    assert pen.vertex.tolist() == [9, 10]
+    np.testing.assert_allclose(pen.depth, [0.05, 0.05])
+    assert pen.edge.tolist() == [3, 3]  # the arm's inner wall, (2, 2) -> (2, 1)
+    # in the notch's open space nothing is inside
+    x, topo = stack([u, box(1.2, 1.2, 0.5, 0.5)])
+    assert len(vertex_penetrations(x, topo)) == 0
+
+
+def contacts(vertex, edge, bj, bk, state, t_n):
+    m = len(vertex)
+    a = [np.asarray(v, dtype=np.int64) for v in (vertex, edge, bj, bk)]
+    return ContactSet(*a, np.asarray(state, dtype=np.int8), np.zeros(m), np.asarray(t_n, float),
+                      np.zeros(m), {})
+
+
+def test_untracked_penetrations_need_a_closed_contact_as_deep():
+    # square 1 sits 0.01 into square 0: its vertices 4 and 5 are inside
+    x, topo = stack([box(0, 0, 1, 1), box(0.2, 0.99, 0.5, 0.5)])
+    pen = vertex_penetrations(x, topo)
+    assert sorted(pen.vertex.tolist()) == [4, 5]
+    tol = np.full(len(pen), 1e-3)
+    pn = 1e9
+    # no contacts at all: both untracked
+    none = contacts([], [], [], [], [], [])
+    assert untracked_penetrations(pen, none, np.zeros(0), tol, topo).all()
+    # both closed at the right depth: tracked
+    both = contacts([4, 5], [2, 2], [1, 1], [0, 0], [STICK, STICK], [-0.01 * pn] * 2)
+    assert not untracked_penetrations(pen, both, np.full(2, pn), tol, topo).any()
+    # one open, one closed but only half as deep as the vertex is: both untracked
+    bad = contacts([4, 5], [2, 2], [1, 1], [0, 0], [OPEN, STICK], [0.0, -0.005 * pn])
+    assert untracked_penetrations(pen, bad, np.full(2, pn), tol, topo).all()
+    # within the tolerance of the spring: tracked
+    near = contacts([4, 5], [2, 2], [1, 1], [0, 0], [STICK, STICK], [-0.0095 * pn] * 2)
+    assert not untracked_penetrations(pen, near, np.full(2, pn), tol, topo).any()
+    # shallower than the tolerance: nothing to track
+    assert not untracked_penetrations(pen, none, np.zeros(0), np.full(2, 0.02), topo).any()
+
+
+def test_a_vertex_vertex_contact_covers_its_mirror_vertex():
+    # two squares corner to corner, each corner 0.01 inside the other; the contact kept is
+    # vertex 0's against block 1's edge that ends at vertex 0's partner
+    a = box(0, 0, 1, 1)
+    b = box(0.99, 0.99, 1, 1)
+    x, topo = stack([a, b])
+    pen = vertex_penetrations(x, topo)
+    assert sorted(pen.vertex.tolist()) == [2, 4]
+    # vertex 2 of block 0 (1, 1) against block 1's bottom edge 4 -> 5: its end vertex 4 is
+    # covered as the mirror image
+    c = contacts([2], [4], [0], [1], [STICK], [-0.01 * 1e9])
+    assert not untracked_penetrations(pen, c, np.array([1e9]), np.full(2, 1e-4), topo).any()
+
+
+def drop_scene():
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(-1, -0.5, 2, 0.5), ROCK, fixed=True, name="floor")
+    scene.add_block(box(-0.1, 0.001, 0.2, 0.2), ROCK, name="brick", velocity=(0.0, -2.0))
+    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                                  friction=CoulombSingle(phi=30.0)))
+    return scene
+
+
+def test_the_guard_stops_a_run_whose_detection_misses_a_contact(monkeypatch, tmp_path):
+    """With a contact detector that finds nothing the brick would fall through the floor;
+    the guard refuses the step, cuts it, and stops the run with the blocks, vertex, depth and
+    time, the steps before kept and written."""
+    import dda.simulation as simulation
+    from dda.contact.detection import CandidateContacts
+
+    def blind(x, topo, d0, limit, pairs=None):
+        return CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
+
+    monkeypatch.setattr(simulation, "narrow_phase", blind)
+    sim = dda.Simulation(drop_scene(), dt=1e-3)
+    writer = dda.io.VTUWriter(tmp_path / "drop")
+    with pytest.raises(dda.SimulationError) as info:
+        sim.run(0.05, output=writer)
+    msg = str(info.value)
+    assert "untracked penetration" in msg
+    assert "of block 'brick'" in msg and "inside block 'floor'" in msg
+    assert "vertex 0" in msg or "vertex 1" in msg
+    # it reaches the floor at t = 0.5 ms (1 mm at 2 m/s) and is stopped within a tolerance
+    # (0.5 mm) of it, not after falling through
+    import re
+
+    t_stop = float(re.search(r"at t = ([0-9.e-]+) s", msg).group(1))
+    assert 0.5e-3 < t_stop < 0.5e-3 + 0.6e-3 / 2.0
+    depth = float(re.search(r"is ([0-9.e-]+) m inside", msg).group(1))
+    assert 0.5e-3 < depth < 2e-3
+    result = info.value.result
+    assert result is not None and len(result.stats.cuts) > 0
+    assert all("untracked penetration" in r for _, _, r in result.stats.cuts)
+    assert writer.pvd_path.exists()
+
+
+def test_the_guard_lets_a_tracked_contact_sink_and_reports_it():
+    sim = dda.Simulation(drop_scene(), dt=1e-3)
+    result = sim.run(0.05)
+    st = result.stats
+    assert len(st.cuts) == 0
+    # the brick lands: the deepest vertex is the deepest spring, to round-off and the
+    # linearization of the last step
+    assert st.penetration.max() > 0
+    np.testing.assert_allclose(st.penetration, st.spring_penetration, rtol=1e-3, atol=1e-9)
+    assert st.guard_time.sum() > 0
+    assert "guard" in str(result.profile())
+
+
+def test_penetration_tolerance_is_checked():
+    with pytest.raises(ValueError, match="penetration_tolerance"):
+        dda.Simulation(drop_scene(), dt=1e-3, penetration_tolerance=0.0)
