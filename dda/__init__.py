@@ -8,7 +8,8 @@ from dda import io
 from dda.io.scene_file import load_scene
 from dda.result import Result
 from dda.scene import Block, Scene
-from dda.simulation import Simulation, SimulationError
+from dda.simulation import PenaltyWarning, Simulation, SimulationError
 
-__all__ = ["Block", "Result", "Scene", "Simulation", "SimulationError", "io", "load_scene"]
+__all__ = ["Block", "PenaltyWarning", "Result", "Scene", "Simulation", "SimulationError", "io",
+           "load_scene"]
 __version__ = "0.1.0"

@@ -13,6 +13,7 @@ import signal
 import sys
 import threading
 import time as _time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -31,6 +32,14 @@ from dda.contact.detection import (
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.kinematics import contact_geometry
 from dda.contact.penetration import untracked_depth, vertex_penetrations
+from dda.penalty_advice import (
+    SOFT_DEPTH,
+    STIFF_CUTS,
+    PenaltyWarning,
+    contact_cut,
+    soft_penalty_advice,
+    stiff_penalty_advice,
+)
 from dda.profiling import StepProfile, section
 from dda.result import Frame, Result
 from dda.scene import Scene
@@ -38,7 +47,7 @@ from dda.solvers.base import NonlinearSolver, StepProblem
 from dda.solvers.newmark import effective_system, updated_velocity
 from dda.solvers.newton import NewtonRaphson
 
-__all__ = ["Simulation", "SimulationError"]
+__all__ = ["Simulation", "SimulationError", "PenaltyWarning"]
 
 # a step is cut at most this many times in a row before the run stops
 MAX_CUTS = 12
@@ -77,6 +86,8 @@ class _Committed:
     centroid: np.ndarray
     # the deepest untracked penetration left in this state, in penetration tolerances
     untracked: float = 0.0
+    # the deepest vertex inside another block, tracked or not (m)
+    penetration: float = 0.0
 
 
 class Simulation:
@@ -178,8 +189,8 @@ class Simulation:
         ints = geometry.polygon_integrals(x0, offsets)
         self.centroid_initial = ints.centroid.copy()
         self.size = np.sqrt(ints.area)  # a length scale per block
-        # a thickness per block (2 area / perimeter: half the side of a square, about the
-        # thickness of a slab); no real contact penetrates half the thinner block's
+        # a half-width per block (2 area / perimeter: half the side of a square, about half
+        # the thickness of a slab): the penetration guard's tolerance is a fraction of it
         edges = x0[self.topo.nxt] - x0
         perimeter = np.add.reduceat(np.hypot(edges[:, 0], edges[:, 1]), offsets[:-1])
         self.thickness = 2.0 * ints.area / perimeter
@@ -265,6 +276,8 @@ class Simulation:
             known_u=np.zeros((nb, 2)), last_move=0.0, centroid=ints.centroid.copy(),
         )
         self._steps_done = 0
+        self._contact_cuts = 0  # steps cut because the contacts would not settle
+        self._warned: set[str] = set()  # the penalty warnings given (each once)
         self._search_hint = 0.0
         self._dt_now = self.dt
         self._good_steps = 0
@@ -366,19 +379,23 @@ class Simulation:
         d_known[self.free] = 0.0
 
         d0 = self._search_distance(dt, centroid, d_known[~self.free, :2])
-        # a vertex found this deep inside a block is on the wrong side of a far edge, not in
-        # contact with it, however wide the search (a thin bar hitting a post at 13.5 m/s was
-        # thrown off at 400 m/s by a 0.5 m "penetration" before this cap)
-        cap = 0.5 * float(np.min(self.thickness))
-        pen_limit = max(min(2.0 * d0, cap), 1e-3 * float(np.min(self.size)),
-                        2.0 * self._deepest_penetration() + min(d0, cap))
+        # how deep behind an edge a vertex is still taken for a contact: twice the deepest
+        # vertex of the committed state (found by the guard, tracked or not) plus the
+        # search distance; detection takes a negative gap only for a vertex inside the
+        # edge's block, so no far edge of a thin block is taken for a contact
+        pen_limit = max(2.0 * d0, 1e-3 * float(np.min(self.size)),
+                        2.0 * max(self._deepest_penetration(), st.penetration) + d0)
         if self.n_blocks > 1:
             with section("detection"):
-                cand = narrow_phase(st.x, self.topo, d0, pen_limit,
-                                    self._pairs(st.x, max(d0, pen_limit)))
+                # a vertex sunk deeper than a quarter of the guard's tolerance is held by
+                # the edge nearest to it, and two such corners get a spring each
+                sunk = 0.25 * self.penetration_tolerance * float(np.min(self.thickness))
+                pairs = self._pairs(st.x, max(d0, pen_limit))
+                cand = narrow_phase(st.x, self.topo, d0, pen_limit, pairs, sunk)
                 contacts, fresh, geom = carry_over(st.contacts, cand, st.x, self.topo.nxt,
                                                    self.topo.prv, self.n_blocks)
         else:  # a single block: nothing to detect
+            pairs = np.zeros((0, 2), dtype=np.int64)
             cand = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
             contacts, fresh, geom = carry_over(st.contacts, cand, st.x, self.topo.nxt,
                                                self.topo.prv, self.n_blocks)
@@ -405,11 +422,14 @@ class Simulation:
         move = geometry.vertex_displacements(st.x, centroid[self.topo.block], d[self.topo.block])
         distance = np.hypot(move[:, 0], move[:, 1])
         largest = float(np.max(distance))
-        if largest > d0:
+        # two blocks closing on each other close their gap by up to twice the largest move:
+        # a vertex that moved more than half the search distance may have met an edge that
+        # was not searched
+        if 2.0 * largest > d0:
             sol.converged = False
-            sol.reason = (f"a vertex moved {largest:.3g} m, beyond the contact search distance "
-                          f"{d0:.3g} m")
-            sol.search_hint = largest
+            sol.reason = (f"a vertex moved {largest:.3g} m, more than half the contact search "
+                          f"distance {d0:.3g} m")
+            sol.search_hint = 2.0 * largest
             return None, sol
         per_block = np.zeros(self.n_blocks)
         np.maximum.at(per_block, self.topo.block, distance)
@@ -423,7 +443,9 @@ class Simulation:
             return None, sol
         x_new = st.x + move
         with section("guard"):
-            refused = self._guard(x_new, sol, self.joint_pn[joint])
+            # no vertex moved farther than d0 (checked above), so the pairs whose boxes
+            # overlap at the end of the step are among the detection's, grown by d0
+            refused = self._guard(x_new, sol, self.joint_pn[joint], pairs)
         if refused:
             sol.converged = False
             sol.reason = refused
@@ -450,10 +472,40 @@ class Simulation:
             rotation=st.rotation + d[:, 2], contacts=sol.contacts, load_points=load_points,
             spring_points=spring_points,
             known_u=known_u, last_move=largest, untracked=sol.untracked,
+            penetration=sol.penetration,
             # a step maps each block affinely, which carries its centroid by (u0, v0)
             centroid=centroid + d[:, :2],
         )
         return new, sol
+
+    def _advise_on_penalty(self):
+        """Warn once (:class:`dda.penalty_advice.PenaltyWarning`) when the committed springs
+        sink too deep for their penalty, and once when the steps keep being cut because the
+        contacts would not settle (a penalty too stiff for the step size)."""
+        if "soft" not in self._warned:
+            c = self.state.contacts
+            closed = np.flatnonzero(c.state != OPEN)
+            if len(closed):
+                pn = self.joint_pn[self._joint_index(c.bj[closed], c.bk[closed])]
+                depth = -c.t_n[closed] / pn
+                half = np.minimum(self.thickness[c.bj[closed]], self.thickness[c.bk[closed]])
+                if np.any(depth > SOFT_DEPTH * half):
+                    names = [f"{self.scene.blocks[j]} on {self.scene.blocks[k]}"
+                             for j, k in zip(c.bj[closed], c.bk[closed], strict=True)]
+                    message = soft_penalty_advice(depth, half, pn, names)
+                    if message:
+                        self._warned.add("soft")
+                        warnings.warn(message, PenaltyWarning, stacklevel=4)
+        if "stiff" not in self._warned and self._contact_cuts >= STIFF_CUTS and self.free.any():
+            mass = self.density * geometry.polygon_integrals(
+                self.state.x, self.offsets, self.topo.nxt).area
+            light = int(np.flatnonzero(self.free)[np.argmin(mass[self.free])])
+            message = stiff_penalty_advice(self._contact_cuts, self._steps_done,
+                                           float(self.joint_pn.max()), float(mass[light]),
+                                           self.dt, str(self.scene.blocks[light]))
+            if message:
+                self._warned.add("stiff")
+                warnings.warn(message, PenaltyWarning, stacklevel=4)
 
     def _pairs(self, x, margin) -> np.ndarray:
         """Block pairs whose boxes, grown by ``margin``, overlap, less those of two blocks
@@ -463,7 +515,7 @@ class Simulation:
         pairs = broad_phase(bounding_boxes(x, self.offsets), margin)
         return pairs[self.free[pairs[:, 0]] | self.free[pairs[:, 1]]]
 
-    def _guard(self, x_new, sol, normal_penalty) -> str:
+    def _guard(self, x_new, sol, normal_penalty, pairs) -> str:
         """The penetration guard on a step's trial: '' when every vertex inside another block
         is held by a closed contact at its depth, else why the step is refused.
 
@@ -472,7 +524,7 @@ class Simulation:
         """
         if self.n_blocks < 2:
             return ""
-        pen = vertex_penetrations(x_new, self.topo, pairs=self._pairs(x_new, 0.0))
+        pen = vertex_penetrations(x_new, self.topo, pairs=pairs)
         c = sol.contacts
         closed = c.state != OPEN
         sol.penetration = pen.deepest
@@ -684,6 +736,8 @@ class Simulation:
                 widened += 1
                 continue
             result.stats.cuts.append((self.state.time, dt, sol.reason))
+            if contact_cut(sol.reason):
+                self._contact_cuts += 1
             self._dt_now = dt / 2.0
             self._good_steps = 0
             if sol.untracked > 1.0 and self.state.untracked > 0.5:
@@ -703,6 +757,7 @@ class Simulation:
         self.state = new
         self._search_hint = 0.0
         self._steps_done += 1
+        self._advise_on_penalty()
         self._good_steps += 1
         if self._dt_now < self.dt and self._good_steps >= GROW_AFTER:
             self._dt_now = min(self.dt, 2.0 * self._dt_now)

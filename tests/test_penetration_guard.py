@@ -40,7 +40,8 @@ def test_vertex_penetrations_match_shapely(blocks):
     polys = [star(cx, cy, r, t) for cx, cy, r, t in blocks]
     x, topo = stack(polys)
     pen = vertex_penetrations(x, topo)
-    found = {(int(v), int(k)): float(d) for v, k, d in zip(pen.vertex, pen.block, pen.depth)}
+    found = {(int(v), int(k)): float(d) for v, k, d in
+             zip(pen.vertex, pen.block, pen.depth, strict=True)}
     shapes = [shapely.Polygon(p) for p in polys]
     expected = {}
     for v, p in enumerate(x):
@@ -133,7 +134,7 @@ def test_the_guard_stops_a_run_whose_detection_misses_a_contact(monkeypatch, tmp
     import dda.simulation as simulation
     from dda.contact.detection import CandidateContacts
 
-    def blind(x, topo, d0, limit, pairs=None):
+    def blind(x, topo, d0, limit, pairs=None, sunk_depth=None):
         return CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
 
     monkeypatch.setattr(simulation, "narrow_phase", blind)

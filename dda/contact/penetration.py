@@ -25,9 +25,9 @@ from dda.contact.contacts import OPEN
 from dda.contact.detection import (
     VertexTopology,
     _directed_vertex_block_pairs,
-    _expand_to_edges,
     bounding_boxes,
     broad_phase,
+    inside_depth,
 )
 
 __all__ = ["Penetrations", "vertex_penetrations", "untracked_depth", "untracked_penetrations"]
@@ -92,30 +92,7 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
     vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
     if len(vertex) == 0:
         return _empty()
-    counts = np.diff(offsets)[kblock]
-    pid, edge = _expand_to_edges(np.arange(len(vertex)), kblock, offsets)
-    q = x[vertex][pid]
-    a = x[edge]
-    b = x[topo.nxt[edge]]
-    ab = b - a
-    # crossing number of the ray from q towards +x (half-open rule: each edge counts once)
-    straddles = (a[:, 1] > q[:, 1]) != (b[:, 1] > q[:, 1])
-    dy = np.where(straddles, ab[:, 1], 1.0)
-    x_cross = a[:, 0] + (q[:, 1] - a[:, 1]) * ab[:, 0] / dy
-    crossing = straddles & (q[:, 0] < x_cross)
-    len2 = np.einsum("ij,ij->i", ab, ab)
-    t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.maximum(len2, 1e-300), 0.0, 1.0)
-    dist = np.hypot(*(q - (a + t[:, None] * ab)).T)
-    starts = np.cumsum(counts) - counts
-    inside = np.add.reduceat(crossing.astype(np.int64), starts) % 2 == 1
-    depth = np.minimum.reduceat(dist, starts)
-    # the nearest edge: the first one of its run at the run's smallest distance
-    at_min = dist == np.repeat(depth, counts)
-    idx = np.flatnonzero(at_min)
-    first = np.ones(len(idx), dtype=bool)
-    first[1:] = pid[idx[1:]] != pid[idx[:-1]]
-    nearest = np.empty(len(vertex), dtype=np.int64)
-    nearest[pid[idx[first]]] = edge[idx[first]]
+    inside, depth, nearest = inside_depth(x[vertex], kblock, x, offsets, topo.nxt)
     keep = inside & (depth > min_depth)
     return Penetrations(vertex[keep], kblock[keep], depth[keep], nearest[keep])
 

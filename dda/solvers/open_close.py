@@ -126,7 +126,10 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         noise = np.abs(gap) <= gap_tol
         closed = (gap < -gap_tol) | (noise & (state != OPEN))
         t_n = np.where(closed, np.minimum(pn * gap, 0.0), 0.0)
-        new_state = np.where(closed, state, OPEN).astype(np.int8)
+        # a closing contact starts sticking (the return map below may make it slip); one that
+        # legacy spares the friction check must not stay open when it closes again after a
+        # pass opened it (a slab bounced into its floor by a brick stayed open 1.4 mm deep)
+        new_state = np.where(closed, np.where(state == OPEN, STICK, state), OPEN).astype(np.int8)
         check = closed & ~(spared & closed0) & ~noise
         t_trial, slipping, _ = laws.return_map(history, dgs, t_n, ps, lc, where=check)
         # a slip that reverses against the friction load of this pass sticks

@@ -157,3 +157,120 @@ def shaken_cut_slope():
     scene.shake(base, acceleration=_table)
     scene.shake(back, acceleration=_table)
     return scene, 2e-3, 0.3, None
+
+
+# ---------------------------------------------------------------- issue 17: contact integrity
+IMPACT_E = 1e10
+IMPACT_ROCK = LinearElastic(young=IMPACT_E, poisson=0.25, density=2500.0)
+
+
+def _impact_joint(scene, penalty):
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
+                                  friction=CoulombSingle(phi=30.0)))
+
+
+def _incline(scene, dip=45.0, length=2.0):
+    th = np.radians(dip)
+    scene.add_block([(0, 0), (length * np.cos(th), 0), (length * np.cos(th), length * np.sin(th))],
+                    IMPACT_ROCK, fixed=True, name="slope")
+    return np.array([np.cos(th), np.sin(th)]), np.array([-np.sin(th), np.cos(th)])
+
+
+def stopper_impact(penalty=1e13, stopper_height=0.3):
+    """A 0.2 m square sent at 5 m/s down a 45 degree incline (phi 30, E 1e10 Pa) into a
+    stopper: a fixed wall at the incline's toe, built touching the incline. A wall lower than
+    the block (``stopper_height`` 0.03 m) trips it over its top corner."""
+    scene = dda.Scene(gravity=9.81)
+    t, n = _incline(scene)
+    h = stopper_height
+    scene.add_block([(-0.3, -0.3), (0.0, -0.3), (0.0, 0.0), (0.0, h), (-0.3, h)], IMPACT_ROCK,
+                    fixed=True, name="stopper")
+    foot = 0.3 * t
+    scene.add_block([tuple(p) for p in (foot, foot + 0.2 * t, foot + 0.2 * t + 0.2 * n,
+                                        foot + 0.2 * n)], IMPACT_ROCK, velocity=tuple(-5 * t),
+                    name="block")
+    _impact_joint(scene, penalty)
+    return scene, 0.3
+
+
+def block_on_block(penalty=1e10):
+    """A 0.2 m square dropped at 3 m/s onto a free slab resting on a floor."""
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(-1, -0.3, 2, 0.3), IMPACT_ROCK, fixed=True, name="floor")
+    scene.add_block(box(-0.3, 0.0, 0.6, 0.2), IMPACT_ROCK, name="slab")
+    scene.add_block(box(-0.05, 0.3, 0.2, 0.2), IMPACT_ROCK, name="brick", velocity=(0.0, -3.0))
+    _impact_joint(scene, penalty)
+    return scene, 0.3
+
+
+def corner_on_corner(penalty=1e10):
+    """A box turned 30 degrees falls at 3 m/s with a corner onto a fixed box's upturned
+    corner."""
+    scene = dda.Scene(gravity=9.81)
+    lower = _rotated(0.3, 0.3, 45.0, -0.5, 0.0)
+    scene.add_block(lower, IMPACT_ROCK, fixed=True, name="anvil")
+    upper = _rotated(0.3, 0.3, 30.0, lower[:, 1].max() + 0.01, 0.0)
+    upper[:, 0] += lower[np.argmax(lower[:, 1]), 0] - upper[np.argmin(upper[:, 1]), 0]
+    scene.add_block(upper, IMPACT_ROCK, velocity=(0.0, -3.0), name="box")
+    _impact_joint(scene, penalty)
+    return scene, 0.3
+
+
+def notch(penalty=1e10):
+    """A 0.2 m square, turned 11 degrees, thrown at (1, -3) m/s into a 0.22 m wide, 0.3 m
+    deep notch of a fixed (non-convex) block: it strikes the notch's wall and its floor."""
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-1, -0.5), (1, -0.5), (1, 0.3), (0.11, 0.3), (0.11, 0.0), (-0.11, 0.0),
+                     (-0.11, 0.3), (-1, 0.3)], IMPACT_ROCK, fixed=True, name="notched")
+    p = np.array(box(-0.1, -0.1, 0.2, 0.2))
+    c, s = np.cos(0.2), np.sin(0.2)
+    scene.add_block(p @ np.array([[c, s], [-s, c]]) + [0.0, 0.5], IMPACT_ROCK,
+                    velocity=(1.0, -3.0), name="peg")
+    _impact_joint(scene, penalty)
+    return scene, 0.3
+
+
+def ell_on_a_step(penalty=1e10):
+    """An L-shaped (non-convex) block thrown at (1, -2) m/s so that a fixed step's corner
+    goes into its inner corner."""
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(-1, -0.3, 2, 0.3), IMPACT_ROCK, fixed=True, name="floor")
+    scene.add_block(box(0.0, 0.0, 0.3, 0.3), IMPACT_ROCK, fixed=True, name="step")
+    ell = [(-0.2, 0.35), (0.3, 0.35), (0.3, 0.45), (-0.1, 0.45), (-0.1, 0.75), (-0.2, 0.75)]
+    scene.add_block(ell, IMPACT_ROCK, velocity=(1.0, -2.0), name="ell")
+    _impact_joint(scene, penalty)
+    return scene, 0.3
+
+
+def lip(penalty=1e10):
+    """The README demo's lip, short: a block slides at 1 m/s down a 15 degree face into the
+    concave corner of a lip on the same (fixed) block, and rebounds back onto the face."""
+    scene = dda.Scene(gravity=9.81)
+    dip = np.radians(15.0)
+    t, n = np.array([np.cos(dip), -np.sin(dip)]), np.array([np.sin(dip), np.cos(dip)])
+
+    def face(x):
+        return 0.15 - x * np.tan(dip)
+
+    x_stop = 0.5
+    scene.add_block([(0, -0.1), (x_stop + 0.05, -0.1), (x_stop + 0.05, face(x_stop) + 0.04),
+                     (x_stop, face(x_stop) + 0.04), (x_stop, face(x_stop)), (0, face(0))],
+                    IMPACT_ROCK, fixed=True, name="lower")
+    # the block's toe 2 cm from the corner
+    toe = np.array([x_stop, face(x_stop)]) - 0.02 * t
+    heel = toe - 0.2 * t
+    scene.add_block([tuple(p) for p in (heel, toe, toe + 0.1 * n, heel + 0.1 * n)], IMPACT_ROCK,
+                    velocity=tuple(1.0 * t), name="upper")
+    _impact_joint(scene, penalty)
+    return scene, 0.3
+
+
+IMPACTS = {
+    "stopper": stopper_impact,
+    "low stopper": lambda penalty: stopper_impact(penalty, stopper_height=0.03),
+    "block on block": block_on_block,
+    "corner on corner": corner_on_corner,
+    "notch": notch,
+    "L on a step": ell_on_a_step,
+    "lip": lip,
+}

@@ -7,6 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda import geometry
+from dda.contact.detection import bounding_boxes, broad_phase
+from dda.contact.penetration import vertex_penetrations
 
 
 @dataclass
@@ -20,6 +22,10 @@ class Watched:
     smallest: float  # smallest block dimension (m)
     cuts: int
     sim: object
+    # the largest excess, over the steps, of the deepest vertex inside another block (found
+    # geometrically) over the deepest closed spring, and the guard's default tolerance
+    untracked: float = 0.0
+    tolerance: float = np.inf
 
     @property
     def energy_gain(self) -> float:
@@ -39,6 +45,24 @@ def smallest_dimension(sim) -> float:
         dist = np.abs(np.einsum("ekj,ej->ek", p[None, :, :] - p[:, None, :], n))
         widths.append(float(dist.max(axis=1).min()))
     return min(widths)
+
+
+def geometric_penetration(sim) -> float:
+    """The deepest vertex of a free block inside another block, or of any block inside a free
+    one (m), found geometrically: contact detection is not asked."""
+    x, offsets = sim.state.x, sim.offsets
+    pairs = broad_phase(bounding_boxes(x, offsets), 0.0)
+    pairs = pairs[sim.free[pairs[:, 0]] | sim.free[pairs[:, 1]]]
+    return vertex_penetrations(x, sim.topo, pairs=pairs).deepest
+
+
+def guard_tolerance(sim) -> float:
+    """1 % of the thinnest block's half-width 2 area / perimeter (the guard's default)."""
+    x, offsets = sim.state.x, sim.offsets
+    ints = geometry.polygon_integrals(x, offsets)
+    edges = x[sim.topo.nxt] - x
+    perimeter = np.add.reduceat(np.hypot(edges[:, 0], edges[:, 1]), offsets[:-1])
+    return 0.01 * float(np.min(2.0 * ints.area / perimeter))
 
 
 def energy_scale(sim) -> float:
@@ -65,6 +89,7 @@ def watch(sim, duration: float, work=None, chunk: int = 1) -> Watched:
     smallest = smallest_dimension(sim)
     scale = energy_scale(sim)
     done = 0.0
+    untracked = 0.0
     while sim.state.time < t_end - 1e-9:
         span = min(chunk * sim.dt, t_end - sim.state.time)
         result = sim.run(span)
@@ -76,8 +101,11 @@ def watch(sim, duration: float, work=None, chunk: int = 1) -> Watched:
         assert np.all(np.isfinite(st.contacts.t_n)) and np.all(np.isfinite(st.contacts.t_s))
         done = work(sim) if work is not None else 0.0
         peak = max(peak, sim.energy().total - done)
-        pen = max(pen, sim._deepest_penetration())
-    return Watched(steps, e0, peak, scale, done, pen, smallest, cuts, sim)
+        spring = sim._deepest_penetration()
+        pen = max(pen, spring)
+        untracked = max(untracked, geometric_penetration(sim) - spring)
+    return Watched(steps, e0, peak, scale, done, pen, smallest, cuts, sim, untracked,
+                   guard_tolerance(sim))
 
 
 def assert_stable(w: Watched):
@@ -89,6 +117,15 @@ def assert_stable(w: Watched):
         f"{w.scale:.4g})")
     assert w.penetration < 0.01 * w.smallest, (
         f"penetration {w.penetration:.3g} m, smallest block {w.smallest:.3g} m")
+    assert_tracked(w)
+
+
+def assert_tracked(w: Watched):
+    """After every step the deepest vertex inside another block is no deeper than the deepest
+    closed spring, give or take the guard's tolerance."""
+    assert w.untracked <= w.tolerance, (
+        f"a vertex {w.untracked:.3g} m deeper inside another block than any closed spring "
+        f"(tolerance {w.tolerance:.3g} m)")
 
 
 class KnownMotionWork:

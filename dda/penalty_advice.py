@@ -1,0 +1,128 @@
+"""Telling the user when the contact penalty is wrong for the scene and the step size.
+
+A penalty spring is a compromise (METHOD.md sections 4 and 5): too soft, and blocks sink into
+each other; too stiff for the step size, and OPEN-CLOSE does not settle, so steps are cut.
+:class:`dda.Simulation` checks both as it runs and warns once for each, with a penalty that
+would do and why:
+
+- **too soft**: a closed spring sinks deeper than ``SOFT_DEPTH`` (5 %) of the thinner
+  block's half-width ``h = 2 area / perimeter``. A resting load ``F`` sinks ``F / p``, so the
+  penalty that keeps it within ``TARGET_DEPTH`` (1 %, the penetration guard's tolerance) is
+  ``p depth / (TARGET_DEPTH h)``; an impact's depth falls only as ``1 / sqrt(p)``, so it may
+  need up to the square of that ratio.
+- **too stiff**: ``STIFF_CUTS`` (20) steps or more cut because contacts would not settle, and
+  at least ``STIFF_SHARE`` (10 %) of the steps taken. The spring is measured against the
+  inertia of the lightest free block, ``k_m = 2 m / dt^2`` (the mass term of Newmark's
+  effective stiffness, METHOD.md section 2): a penalty near ``STIFF_RATIO`` (10) times
+  ``k_m``, or a step ``dt = sqrt(2 STIFF_RATIO m / p)``, keeps the spring from dominating.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["PenaltyWarning", "soft_penalty_advice", "stiff_penalty_advice", "contact_cut"]
+
+SOFT_DEPTH = 0.05
+TARGET_DEPTH = 0.01
+STIFF_CUTS = 20
+STIFF_SHARE = 0.1
+STIFF_RATIO = 10.0
+
+# the reasons of a dt cut that come from the contacts (see Simulation and the solvers)
+_CONTACT_REASONS = ("OPEN-CLOSE did not settle", "Newton-Raphson did not converge",
+                    "untracked penetration")
+
+
+class PenaltyWarning(UserWarning):
+    """The contact penalty looks wrong for the scene or the step size."""
+
+
+def _nice(value: float) -> str:
+    """A round number near ``value`` (one significant digit, rounded up)."""
+    if not math.isfinite(value) or value <= 0:
+        return f"{value:g}"
+    exp = math.floor(math.log10(value))
+    lead = math.ceil(value / 10**exp - 1e-9)
+    if lead == 10:
+        lead, exp = 1, exp + 1
+    return f"{lead}e{exp}"
+
+
+def contact_cut(reason: str) -> bool:
+    """Whether a dt cut's reason comes from the contacts."""
+    return reason.startswith(_CONTACT_REASONS)
+
+
+def soft_penalty_advice(depth: np.ndarray, half_width: np.ndarray, penalty: np.ndarray,
+                        names: list[str]) -> str | None:
+    """The warning for springs that sink too deep, or None.
+
+    Parameters
+    ----------
+    depth : (m,) spring penetration ``-t_n / p_n`` of each closed contact (m)
+    half_width : (m,) the thinner block's half-width of each contact (m)
+    penalty : (m,) each contact's normal penalty (N/m)
+    names : (m,) how to name each contact's pair of blocks
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> print(soft_penalty_advice(np.array([0.01]), np.array([0.1]), np.array([1e6]),
+    ...                           ["block 'a' on block 'b'"]))  # doctest: +NORMALIZE_WHITESPACE
+    contact springs sink too deep: 0.01 m, 10% of the half-width (2 area / perimeter) of
+    block 'a' on block 'b', with a normal penalty of 1e+06 N/m. A penalty of at least 1e7 N/m
+    keeps a resting load within 1% (an impact, whose depth falls as 1/sqrt(penalty), may need
+    up to 1e8 N/m); a penalty this soft lets blocks sink into each other.
+    """
+    if len(depth) == 0:
+        return None
+    ratio = depth / half_width
+    i = int(np.argmax(ratio))
+    if ratio[i] <= SOFT_DEPTH:
+        return None
+    factor = ratio[i] / TARGET_DEPTH
+    return (f"contact springs sink too deep: {depth[i]:.3g} m, {100 * ratio[i]:.3g}% of the "
+            f"half-width (2 area / perimeter) of {names[i]}, with a normal penalty of "
+            f"{penalty[i]:.3g} N/m. A penalty of at least {_nice(penalty[i] * factor)} N/m "
+            f"keeps a resting load within {100 * TARGET_DEPTH:g}% (an impact, whose depth "
+            f"falls as 1/sqrt(penalty), may need up to {_nice(penalty[i] * factor**2)} N/m); "
+            "a penalty this soft lets blocks sink into each other.")
+
+
+def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt: float,
+                         name: str) -> str | None:
+    """The warning for a penalty too stiff for the step size, or None.
+
+    Parameters
+    ----------
+    cuts : steps cut so far because the contacts would not settle
+    steps : steps taken so far
+    penalty : the stiffest normal penalty in play (N/m)
+    mass : the lightest free block's mass (kg per m)
+    dt : the step size asked for (s)
+    name : that block's name
+
+    Examples
+    --------
+    >>> print(stiff_penalty_advice(40, 100, 1e13, 100.0, 1e-3, "block 'b'"))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    the step was cut 40 times in 100 steps because the contacts would not settle: the normal
+    penalty 1e+13 N/m is 5e+04 times the inertia 2 m / dt^2 = 2e+08 N/m of block 'b' (the
+    lightest free block). A penalty of about 2e9 N/m at dt = 0.001 s, or dt = 1.41e-05 s at
+    this penalty, keeps the springs from dominating the step.
+    """
+    if cuts < STIFF_CUTS or cuts < STIFF_SHARE * steps:
+        return None
+    inertia = 2.0 * mass / dt**2
+    ratio = penalty / inertia
+    if ratio <= STIFF_RATIO:
+        return None
+    dt_ok = math.sqrt(2.0 * STIFF_RATIO * mass / penalty)
+    return (f"the step was cut {cuts} times in {steps} steps because the contacts would not "
+            f"settle: the normal penalty {penalty:.3g} N/m is {ratio:.2g} times the inertia "
+            f"2 m / dt^2 = {inertia:.3g} N/m of {name} (the lightest free block). A penalty of "
+            f"about {_nice(STIFF_RATIO * inertia)} N/m at dt = {dt:g} s, or dt = {dt_ok:.3g} s "
+            "at this penalty, keeps the springs from dominating the step.")

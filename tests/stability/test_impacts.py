@@ -1,0 +1,60 @@
+"""Impacts (issue 17): no vertex passes into another block untracked, and no impact ends with
+more energy than it started with, for penalties from E/1e4 to 1000 E and dt from 1e-4 to
+1e-2 s, under both solvers; concave corners (a lip, a notch, an L-shaped block) included.
+
+Each case runs through ``watch``: after every step the energy (kinetic, potential, strain and
+springs) must not exceed the start by more than 1 % of what the scene can set free, and the
+deepest vertex inside another block, found geometrically, must be no deeper than the deepest
+closed spring, give or take the guard's tolerance. dt 1e-4 is marked slow.
+"""
+
+import warnings
+
+import pytest
+
+import dda
+from tests.stability import scenes
+from tests.stability.watch import assert_tracked, watch
+
+SOLVERS = {"newton": dda.solvers.NewtonRaphson, "legacy": dda.solvers.LegacyPullBack}
+E = scenes.IMPACT_E
+PENALTIES = {"E/1e4": E / 1e4, "E/100": E / 100, "E": E, "1000 E": 1000 * E}
+MATRIX = ["stopper", "block on block", "corner on corner", "notch"]
+CONCAVE = ["lip", "L on a step", "low stopper"]
+DTS = [pytest.param(1e-4, marks=pytest.mark.slow), 1e-3, 1e-2]
+
+
+def run_impact(name, penalty, dt, solver):
+    scene, duration = scenes.IMPACTS[name](penalty)
+    sim = dda.Simulation(scene, dt=dt, solver=SOLVERS[solver]())
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        w = watch(sim, duration, chunk=1)
+    assert w.sim.state.time == pytest.approx(duration)
+    return w, [str(c.message) for c in caught]
+
+
+def assert_no_energy_gain(w):
+    assert w.energy_gain <= 0.01, (
+        f"energy rose by {w.energy_peak - w.energy0:.4g} J/m ({100 * w.energy_gain:.2f} % of "
+        f"{w.scale:.4g})")
+
+
+@pytest.mark.parametrize("solver", sorted(SOLVERS))
+@pytest.mark.parametrize("dt", DTS)
+@pytest.mark.parametrize("penalty", list(PENALTIES))
+@pytest.mark.parametrize("name", MATRIX)
+def test_impact_matrix(name, penalty, dt, solver):
+    w, _ = run_impact(name, PENALTIES[penalty], dt, solver)
+    assert_no_energy_gain(w)
+    assert_tracked(w)
+
+
+@pytest.mark.parametrize("solver", sorted(SOLVERS))
+@pytest.mark.parametrize("dt", DTS)
+@pytest.mark.parametrize("penalty", ["E", "1000 E"])
+@pytest.mark.parametrize("name", CONCAVE)
+def test_impacts_into_concave_corners(name, penalty, dt, solver):
+    w, _ = run_impact(name, PENALTIES[penalty], dt, solver)
+    assert_no_energy_gain(w)
+    assert_tracked(w)

@@ -1,0 +1,53 @@
+"""The penalty is checked as a run goes (issue 17, item 4): too soft, too stiff for dt."""
+
+import re
+import warnings
+
+import pytest
+
+import dda
+from dda.penalty_advice import PenaltyWarning, contact_cut
+from tests.stability import scenes
+
+
+def run(penalty, dt, duration=None):
+    scene, default = scenes.stopper_impact(penalty)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = dda.Simulation(scene, dt=dt).run(duration or default)
+    return result, [str(c.message) for c in caught if issubclass(c.category, PenaltyWarning)]
+
+
+def test_a_soft_penalty_is_told_once_with_a_penalty_that_would_do():
+    result, said = run(1e6, 1e-3)  # E / 1e4
+    assert len(said) == 1
+    assert "sink too deep" in said[0] and "block 'block' on block 'stopper'" in said[0]
+    # the impact's advice (depth falls as 1/sqrt(penalty)) does: no warning, and the springs
+    # stay within the 5 % that warns
+    impact = float(re.search(r"may need up to ([0-9e.+-]+) N/m", said[0]).group(1))
+    result, again = run(impact, 1e-3)
+    assert again == []
+    assert result.stats.spring_penetration.max() < 0.05 * 0.1  # the block's half-width 0.1 m
+
+
+def test_a_penalty_too_stiff_for_dt_is_told_once():
+    result, said = run(1e13, 1e-3)  # 1000 E
+    cuts = [r for _, _, r in result.stats.cuts if contact_cut(r)]
+    assert len(cuts) >= 20
+    assert len(said) == 1 and "because the contacts would not settle" in said[0]
+    penalty = float(re.search(r"A penalty of about ([0-9e.+-]+) N/m", said[0]).group(1))
+    # with the advised penalty the same impact cuts far fewer steps and says nothing
+    fewer, again = run(penalty, 1e-3)
+    assert again == []
+    assert len(fewer.stats.cuts) < len(cuts) / 2
+
+
+@pytest.mark.parametrize("penalty", [1e8, 1e10])
+def test_a_good_penalty_is_not_warned_about(penalty):
+    _, said = run(penalty, 1e-3)
+    assert said == []
+
+
+def test_penalty_warning_is_exported():
+    assert dda.PenaltyWarning is PenaltyWarning
+    assert issubclass(PenaltyWarning, UserWarning)
