@@ -4,7 +4,7 @@ geometrically, and a step that leaves one untracked is refused."""
 import numpy as np
 import pytest
 import shapely
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import dda
@@ -32,7 +32,8 @@ def star(cx, cy, radii, turn):
                     axis=1)
 
 
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=80, deadline=None, derandomize=True)
+@example([(0.0, 0.0, [0.375, 1.0, 1.0], 0.375), (0.5, 0.0, [0.375, 1.0, 0.375], 0.375)])
 @given(st.lists(st.tuples(st.floats(0, 3), st.floats(0, 3),
                           st.lists(st.floats(0.3, 1.0), min_size=3, max_size=9),
                           st.floats(0, 6.3)), min_size=2, max_size=5))

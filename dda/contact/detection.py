@@ -16,7 +16,9 @@ A vertex-edge pair is a contact candidate when
 2. the foot of the perpendicular lies on the edge (0 <= xi <= 1 up to round-off), or the
    vertex lies within the search distance of the edge's end vertex (vertex-vertex);
 3. the gap lies in ``[-penetration_limit, search_distance]``, and a negative gap (the vertex
-   behind the edge's line) counts only when the vertex is inside the edge's block;
+   behind the edge's line) counts only when the vertex is inside the edge's block, no deeper
+   behind the line than it is inside the block (its distance to the block's boundary) plus
+   ``sunk_depth``;
 4. the vertex is locally the first point of its block to cross the edge's line: both of its
    edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG`` (a
    vertex sunk into the block deeper than ``sunk_depth`` is exempt: the nearest edge holds
@@ -70,6 +72,15 @@ class VertexTopology:
         prv[nxt] = np.arange(len(nxt))
         block = np.repeat(np.arange(len(counts)), counts)
         return cls(offsets=offsets, block=block, nxt=nxt, prv=prv)
+
+    def straight(self, x: np.ndarray) -> np.ndarray:
+        """Whether each vertex lies on the straight line of its two edges (to round-off): a
+        point of a side, not a corner."""
+        a = x[self.prv] - x
+        b = x[self.nxt] - x
+        cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        scale = np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
+        return (np.abs(cross) <= 1e-9 * scale) & (np.einsum("ij,ij->i", a, b) < 0.0)
 
     def reflex(self, x: np.ndarray) -> np.ndarray:
         """Whether each vertex is reflex (its interior angle above 180 degrees by more than
@@ -224,21 +235,39 @@ def narrow_phase(
     on_edge = (xi >= -_XI_TOL) & (xi <= 1.0 + _XI_TOL)
     # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
     end = np.where((xi < 0.5)[:, None], p2, p3)
-    near_end = np.hypot(*(p1 - end).T) <= search_distance
-    ok = (on_edge | near_end) & (gap <= search_distance) & (gap >= -penetration_limit)
+    end_distance = np.hypot(*(p1 - end).T)
+    ok = (gap <= search_distance) & (gap >= -penetration_limit)
     # a vertex behind an edge's line is in contact with it only when it is inside the
     # block: beyond a thin block's far side it is behind the near edge's line too (gaps
     # within round-off of zero are left alone: touching is neither inside nor out)
     behind = np.flatnonzero(ok & (gap < -_GAP_TIE * frame.length))
     sunk = np.zeros(len(ok), dtype=bool)
+    reach = np.full(len(ok), search_distance)
     if len(behind):
-        inside, depth, _ = inside_depth(p1[behind], topo.block[edge[behind]], x, topo.offsets,
+        # once per (vertex, block), not per edge
+        nb = len(topo.offsets)
+        key, first, back = np.unique(vertex[behind] * nb + topo.block[edge[behind]],
+                                     return_index=True, return_inverse=True)
+        inside, depth, _ = inside_depth(p1[behind[first]], key % nb, x, topo.offsets,
                                         topo.nxt)
+        inside, depth = inside[back], depth[back]
         # on the boundary (within round-off of an edge) is neither in nor out: a corner of a
         # block sitting on an equal-width one lies on the lower block's side line
         on_boundary = depth <= _GAP_TIE * frame.length[behind]
         ok[behind[~inside & ~on_boundary]] = False
-        sunk[behind[inside & (depth > sunk_depth)]] = True
+        # nor deeper behind that line than the vertex is inside the block, give or take
+        # sunk_depth: a corner that has just entered a box through its top face is 3.8 cm
+        # behind the line of the box's side face, and a spring there throws the box off
+        too_deep = -gap[behind] > depth + sunk_depth
+        ok[behind[too_deep]] = False
+        deep = inside & (depth > sunk_depth)
+        sunk[behind[deep]] = True
+        # a vertex sunk into a block's reflex corner is nearest to the corner itself, past
+        # the end of both its edges: it reaches them as far as it is deep
+        reach[behind[deep]] += depth[deep]
+    # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
+    near_end = end_distance <= reach
+    ok &= on_edge | near_end
     # entrance test: both edges at the vertex leave towards the outside of the edge's line.
     # It says which edge a vertex comes through; a vertex already inside the block (a soft
     # penalty, a deep impact) is held by the edge it is least deep behind whatever its
@@ -325,8 +354,11 @@ def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.n
     pid, edge = _expand_to_edges(np.arange(len(p)), kblock, offsets)
     q = p[pid]
     a = x[edge]
-    ab = x[nxt[edge]] - a
-    straddles = (a[:, 1] > q[:, 1]) != (a[:, 1] + ab[:, 1] > q[:, 1])
+    b = x[nxt[edge]]
+    ab = b - a
+    # compare the end points themselves: a + (b - a) need not be b in floating point, and a
+    # ray through a vertex would then count it twice or not at all
+    straddles = (a[:, 1] > q[:, 1]) != (b[:, 1] > q[:, 1])
     dy = np.where(straddles, ab[:, 1], 1.0)
     crossing = straddles & (q[:, 0] < a[:, 0] + (q[:, 1] - a[:, 1]) * ab[:, 0] / dy)
     len2 = np.einsum("ij,ij->i", ab, ab)
@@ -346,22 +378,9 @@ def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.n
 
 def _strictly_inside(p, kblock, x, offsets, nxt, tol):
     """Whether each point p (n, 2) lies inside block kblock (n,) farther than tol from its
-    boundary (ray-crossing parity over the block's edges, all points at once)."""
-    pid, edge = _expand_to_edges(np.arange(len(p)), kblock, offsets)
-    q = p[pid]
-    a = x[edge]
-    b = x[nxt[edge]]
-    cond = (a[:, 1] > q[:, 1]) != (b[:, 1] > q[:, 1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        xcross = a[:, 0] + (q[:, 1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
-    crossing = cond & (q[:, 0] < xcross)
-    ab = b - a
-    t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.einsum("ij,ij->i", ab, ab), 0.0, 1.0)
-    dist = np.linalg.norm(q - (a + t[:, None] * ab), axis=1)
-    count = np.bincount(pid, weights=crossing.astype(float), minlength=len(p))
-    mind = np.full(len(p), np.inf)
-    np.minimum.at(mind, pid, dist)
-    return (count % 2 == 1) & (mind > tol)
+    boundary."""
+    inside, depth, _ = inside_depth(p, kblock, x, offsets, nxt)
+    return inside & (depth > tol)
 
 
 def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9) -> list:

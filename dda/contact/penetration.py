@@ -62,7 +62,10 @@ def _empty() -> Penetrations:
 
 def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 0.0,
                         pairs: np.ndarray | None = None) -> Penetrations:
-    """Every vertex of ``x`` that lies inside another block deeper than ``min_depth`` (m).
+    """Every corner of ``x`` that lies inside another block deeper than ``min_depth`` (m).
+
+    A vertex between collinear edges is not a corner and is left out (as contact detection
+    leaves it out): it is a point of a side, which the corners' springs hold.
 
     Parameters
     ----------
@@ -90,6 +93,9 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
     if len(pairs) == 0:
         return _empty()
     vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
+    # a vertex between collinear edges is a point of a side, not a corner: where two blocks
+    # overlap edge to edge it is inside the other, and the corners' springs hold the overlap
+    vertex, kblock = (a[~topo.straight(x)[vertex]] for a in (vertex, kblock))
     if len(vertex) == 0:
         return _empty()
     inside, depth, nearest = inside_depth(x[vertex], kblock, x, offsets, topo.nxt)
@@ -103,8 +109,10 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
 
     A penetration of vertex P into block k at depth delta is held by a closed contact of P
     against an edge of k, or (vertex-vertex) by a closed contact between the same two blocks
-    whose contacted edge ends at P; the result is ``delta - max(-t_n / p_n)`` over those
-    contacts (``delta`` itself when there is none).
+    whose contacted edge ends at P; the result is ``delta`` less the spring penetration
+    ``-t_n / p_n`` of those contacts (``delta`` itself when there is none). P's own springs
+    against k add as ``sqrt(sum s^2)``: in a reflex corner of k, P is held by both edges and
+    is deepest from the corner point, ``sqrt(s1^2 + s2^2)`` for a square corner.
 
     Parameters
     ----------
@@ -121,20 +129,30 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
         return pen.depth.copy()
     spring = -c.t_n[closed] / normal_penalty[closed]
     nb = len(topo.offsets)
-    # the two ways a closed contact can hold a vertex inside a block
+    want = pen.vertex * nb + pen.block
+    # the vertex's own springs against that block: one for a convex block; two at a reflex
+    # corner, where the vertex is deepest from the corner point itself and the two lines'
+    # gaps add up to it as the sides of a right triangle (exact for a square corner)
     own = c.vertex[closed] * nb + c.bk[closed]
+    held_own = np.sqrt(_gather(own, spring**2, want, np.add))
+    # the mirror image of a vertex-vertex contact: a closed contact between the same blocks
+    # whose contacted edge ends at the vertex
     edge_end = np.concatenate([c.edge[closed], topo.nxt[c.edge[closed]]])
     mirrored = edge_end * nb + np.tile(c.bj[closed], 2)
-    keys = np.concatenate([own, mirrored])
-    depth = np.concatenate([spring, spring, spring])
-    order = np.argsort(keys, kind="stable")
-    keys, depth = keys[order], depth[order]
-    uniq, start = np.unique(keys, return_index=True)
-    best = np.maximum.reduceat(depth, start)
-    want = pen.vertex * nb + pen.block
-    pos = np.clip(np.searchsorted(uniq, want), 0, len(uniq) - 1)
-    held = np.where(uniq[pos] == want, best[pos], 0.0)
+    held_mirror = _gather(mirrored, np.tile(spring, 2), want, np.maximum)
+    held = np.maximum(held_own, held_mirror)
     return pen.depth - held
+
+
+def _gather(keys, values, want, reduce) -> np.ndarray:
+    """For each of ``want``, ``reduce`` (np.add or np.maximum) of the values whose key it is
+    (0 where none is)."""
+    order = np.argsort(keys, kind="stable")
+    keys, values = keys[order], values[order]
+    uniq, start = np.unique(keys, return_index=True)
+    total = reduce.reduceat(values, start)
+    pos = np.clip(np.searchsorted(uniq, want), 0, len(uniq) - 1)
+    return np.where(uniq[pos] == want, total[pos], 0.0)
 
 
 def untracked_penetrations(pen: Penetrations, contacts, normal_penalty: np.ndarray,

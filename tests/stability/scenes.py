@@ -231,13 +231,14 @@ def notch(penalty=1e10):
 
 
 def ell_on_a_step(penalty=1e10):
-    """An L-shaped (non-convex) block thrown at (1, -2) m/s so that a fixed step's corner
-    goes into its inner corner."""
+    """An L-shaped (non-convex) block, its leg down and its inner corner facing down and to
+    the right, thrown at (2, -1) m/s so that a fixed step's top corner goes into the inner
+    corner: the leg strikes the step's side and the top bar its top."""
     scene = dda.Scene(gravity=9.81)
     scene.add_block(box(-1, -0.3, 2, 0.3), IMPACT_ROCK, fixed=True, name="floor")
     scene.add_block(box(0.0, 0.0, 0.3, 0.3), IMPACT_ROCK, fixed=True, name="step")
-    ell = [(-0.2, 0.35), (0.3, 0.35), (0.3, 0.45), (-0.1, 0.45), (-0.1, 0.75), (-0.2, 0.75)]
-    scene.add_block(ell, IMPACT_ROCK, velocity=(1.0, -2.0), name="ell")
+    ell = [(-0.2, 0.05), (-0.1, 0.05), (-0.1, 0.35), (0.3, 0.35), (0.3, 0.45), (-0.2, 0.45)]
+    scene.add_block(ell, IMPACT_ROCK, velocity=(2.0, -1.0), name="ell")
     _impact_joint(scene, penalty)
     return scene, 0.3
 
