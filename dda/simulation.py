@@ -35,6 +35,7 @@ from dda.contact.penetration import untracked_depth, vertex_penetrations
 from dda.penalty_advice import (
     SOFT_DEPTH,
     STIFF_CUTS,
+    STIFF_SHARE,
     PenaltyWarning,
     contact_cut,
     soft_penalty_advice,
@@ -496,9 +497,9 @@ class Simulation:
                     if message:
                         self._warned.add("soft")
                         warnings.warn(message, PenaltyWarning, stacklevel=4)
-        if "stiff" not in self._warned and self._contact_cuts >= STIFF_CUTS and self.free.any():
-            mass = self.density * geometry.polygon_integrals(
-                self.state.x, self.offsets, self.topo.nxt).area
+        if ("stiff" not in self._warned and self._contact_cuts >= STIFF_CUTS
+                and self._contact_cuts >= STIFF_SHARE * self._steps_done and self.free.any()):
+            mass = self.density * self.size**2  # the blocks' masses at the start
             light = int(np.flatnonzero(self.free)[np.argmin(mass[self.free])])
             message = stiff_penalty_advice(self._contact_cuts, self._steps_done,
                                            float(self.joint_pn.max()), float(mass[light]),

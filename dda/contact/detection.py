@@ -73,28 +73,29 @@ class VertexTopology:
         block = np.repeat(np.arange(len(counts)), counts)
         return cls(offsets=offsets, block=block, nxt=nxt, prv=prv)
 
-    def straight(self, x: np.ndarray) -> np.ndarray:
-        """Whether each vertex lies on the straight line of its two edges (to round-off): a
-        point of a side, not a corner."""
+    def _turn(self, x: np.ndarray):
+        """The arms a = prev - v and b = next - v of every vertex, the cross product a x b
+        and its round-off scale |a| |b|."""
         a = x[self.prv] - x
         b = x[self.nxt] - x
         cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-        scale = np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
+        return a, b, cross, np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
+
+    def straight(self, x: np.ndarray) -> np.ndarray:
+        """Whether each vertex lies on the straight line of its two edges (to round-off): a
+        point of a side, not a corner."""
+        a, b, cross, scale = self._turn(x)
         return (np.abs(cross) <= 1e-9 * scale) & (np.einsum("ij,ij->i", a, b) < 0.0)
 
     def reflex(self, x: np.ndarray) -> np.ndarray:
         """Whether each vertex is reflex (its interior angle above 180 degrees by more than
         round-off; a straight vertex between collinear edges is not)."""
-        a = x[self.prv] - x
-        b = x[self.nxt] - x
-        cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-        return cross > 1e-9 * np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
+        _, _, cross, scale = self._turn(x)
+        return cross > 1e-9 * scale
 
     def convex_and_bisector(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Convexity of every vertex and its outward unit bisector."""
-        a = x[self.prv] - x
-        b = x[self.nxt] - x
-        cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+        a, b, cross, _ = self._turn(x)
         convex = cross < 0.0  # counter-clockwise polygon: prev -> v -> next turns left
         ua = a / np.linalg.norm(a, axis=1)[:, None]
         ub = b / np.linalg.norm(b, axis=1)[:, None]
@@ -279,7 +280,7 @@ def narrow_phase(
         arm_len = np.hypot(arm[:, 0], arm[:, 1])
         ok &= sunk | (np.einsum("ij,ij->i", arm, normal) >= -sin_tol * arm_len)
     vertex, edge, xi, normal, p1 = vertex[ok], edge[ok], xi[ok], normal[ok], p1[ok]
-    on_edge, gap, length = on_edge[ok], gap[ok], frame.length[ok]
+    on_edge, gap, length, sunk = on_edge[ok], gap[ok], frame.length[ok], sunk[ok]
     if len(vertex) == 0:
         return empty
     kblock = topo.block[edge]
@@ -293,8 +294,8 @@ def narrow_phase(
     np.maximum.at(best, group, gap)
     least_deep = gap >= best[group] - _GAP_TIE * length
     order = np.lexsort((-score, ~on_edge, ~least_deep, kblock, vertex))
-    vertex, edge, xi, kblock, score, p1, on_edge = (
-        a[order] for a in (vertex, edge, xi, kblock, score, p1, on_edge)
+    vertex, edge, xi, kblock, score, p1, on_edge, sunk = (
+        a[order] for a in (vertex, edge, xi, kblock, score, p1, on_edge, sunk)
     )
     first = np.ones(len(vertex), dtype=bool)
     first[1:] = (vertex[1:] != vertex[:-1]) | (kblock[1:] != kblock[:-1])
@@ -306,8 +307,8 @@ def narrow_phase(
     reflex = topo.reflex(x)
     keep = first | ((edge == topo.nxt[chosen]) & reflex[topo.nxt[chosen]]) | (
         (edge == topo.prv[chosen]) & reflex[chosen])
-    vertex, edge, xi, kblock, score, p1, on_edge = (
-        a[keep] for a in (vertex, edge, xi, kblock, score, p1, on_edge)
+    vertex, edge, xi, kblock, score, p1, on_edge, sunk = (
+        a[keep] for a in (vertex, edge, xi, kblock, score, p1, on_edge, sunk)
     )
 
     # vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)
@@ -325,11 +326,7 @@ def narrow_phase(
         kept_vertex = vertex[idx][head][np.cumsum(head) - 1]
         # only the mirror image goes: the same vertex in a reflex corner keeps both edges
         dup = ~head & (vertex[idx] != kept_vertex)
-        if np.isfinite(sunk_depth) and dup.any():
-            gone = idx[dup]
-            inside, depth, _ = inside_depth(x[vertex[gone]], kblock[gone], x, topo.offsets,
-                                            topo.nxt)
-            dup[np.flatnonzero(dup)[inside & (depth > sunk_depth)]] = False
+        dup &= ~sunk[idx]  # a sunk vertex keeps its own spring
         drop = np.zeros(len(vertex), dtype=bool)
         drop[idx[dup]] = True
         vertex, edge, kblock = vertex[~drop], edge[~drop], kblock[~drop]

@@ -62,11 +62,7 @@ def untracked(sim) -> float:
 
 def guard_tolerance(sim) -> float:
     """1 % of the thinnest block's half-width 2 area / perimeter (the guard's default)."""
-    x, offsets = sim.state.x, sim.offsets
-    ints = geometry.polygon_integrals(x, offsets)
-    edges = x[sim.topo.nxt] - x
-    perimeter = np.add.reduceat(np.hypot(edges[:, 0], edges[:, 1]), offsets[:-1])
-    return 0.01 * float(np.min(2.0 * ints.area / perimeter))
+    return 0.01 * float(np.min(sim.thickness))
 
 
 def energy_scale(sim) -> float:
