@@ -136,6 +136,8 @@ class BartonBandis(FrictionLaw):
     1.0
     """
 
+    name = "barton"
+
     def __init__(self, jrc: float, jcs: float, phi_r: float, mobilized: bool = True,
                  slip_at_peak: float | None = None, block_size: float | None = None,
                  dilation: bool = False, max_angle: float = 70.0):

@@ -47,6 +47,8 @@ class FrictionLaw(ABC):
     its contacts form one face).
     """
 
+    #: the law's name in scene files, sweeps and the CLI (the registry's key)
+    name: str = "law"
     uses_faces: bool = False
 
     def history_fields(self) -> dict[str, float]:
@@ -122,6 +124,8 @@ class CoulombSingle(FrictionLaw):
     >>> trial.t_s.round(6).tolist(), trial.slipping.tolist()
     ([100.0, -10.0], [True, False])
     """
+
+    name = "coulomb"
 
     def __init__(self, phi: float, cohesion: float = 0.0):
         phi = finite_number("phi", phi, nonnegative=True, where="CoulombSingle")
@@ -200,6 +204,7 @@ class StaticDynamicTransition(FrictionLaw):
     (0.364, True)
     """
 
+    name = "transition"
     ONSETS = ("contact", "face")
 
     def __init__(self, phi_static: float, phi_dynamic: float, onset: str = "contact"):
