@@ -239,7 +239,7 @@ class Simulation:
         self.joint_pn = np.array([j.normal_penalty for j in joints], dtype=float)
         self.joint_ps = np.array([j.shear_penalty for j in joints], dtype=float)
         self.joint_law = np.array([law_of[id(j.friction)] for j in joints], dtype=np.int64)
-        fields = {"g_se": 0.0, "slip": 0.0}  # every law keeps these (FrictionLaw)
+        fields = {}  # the history fields of every law in the scene
         for law in laws:
             fields.update(law.history_fields())
         self.history_fields = fields

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dda.contact.contacts import SLIP, STICK, ContactSet
+from dda.contact.contacts import OPEN, SLIP, STICK, ContactSet
 from dda.contact.faces import Faces, contact_faces
 from dda.contact.friction import FrictionLaw
 from dda.contact.kinematics import (
@@ -102,18 +102,25 @@ class LawGroups:
             return t_s, slipping, trial_history, (dts_dgs, dts_dgn)
         return t_s, slipping, trial_history
 
-    def elastic_update(self, history, delta_g_s, where):
-        """History after an elastic (stick) step of the contacts in ``where`` (in a copy)."""
+    def stick(self, history, delta_g_s, shear_penalty, where):
+        """Every contact in ``where`` locked on its elastic branch through its own law.
+
+        Returns the shear force (zero outside ``where``) and the history (a copy; the
+        contacts outside ``where`` keep theirs).
+        """
         with section("return_map"):
+            t_s = np.zeros(len(delta_g_s))
             out = {k: v.copy() for k, v in history.items()}
             for law, idx in self.groups:
                 idx = idx[where[idx]]
                 if len(idx) == 0:
                     continue
-                update = law.elastic_update(self._select(history, law, idx), delta_g_s[idx])
-                for k, v in update.items():
+                trial = law.stick(self._select(history, law, idx), delta_g_s[idx],
+                                  shear_penalty[idx])
+                t_s[idx] = trial.t_s
+                for k, v in law.commit(trial).items():
                     out[k][idx] = v
-            return out
+            return t_s, out
 
 
 @dataclass
@@ -195,6 +202,26 @@ class ContactElement:
     def __len__(self):
         return len(self.bj)
 
+    # -- the door to the friction laws: solvers ask the element, never a law or its history
+    def friction(self, history, delta_g_s, t_n, where):
+        """Return map of the contacts in ``where`` from ``history`` through their own laws.
+
+        Returns ``(t_s, slipping, trial_history)``, full length (zero force elsewhere).
+        """
+        return self.laws.return_map(history, delta_g_s, t_n, self.shear_penalty, self.length,
+                                    where=where)
+
+    def stick(self, history, delta_g_s, where):
+        """Shear force and history of the contacts in ``where`` locked on their elastic
+        branch (:meth:`dda.contact.FrictionLaw.stick`): legacy DDA's stick spring."""
+        return self.laws.stick(history, delta_g_s, self.shear_penalty, where)
+
+    def trial_contacts(self, state, t_n, t_s, history) -> ContactSet:
+        """The step's trial contact set; open contacts get their law's initial history."""
+        self.laws.initial_history(history, state == OPEN)
+        c = self.contacts
+        return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s, history)
+
     def pair_increments(self, d: np.ndarray) -> np.ndarray:
         """(m, 12) increments [d_j; d_k] of each contact's two blocks from (n_blocks, 6) d."""
         return np.concatenate([d[self.bj], d[self.bk]], axis=1)
@@ -207,11 +234,12 @@ class ContactElement:
             dgs = np.einsum("mi,mi->m", self.i_row, dd)
             return gap, dgs
 
-    def legacy_contributions(self, state, g_se, t_s_slip):
+    def legacy_contributions(self, state, t_stick, t_s_slip):
         """Stiffness and force of original DDA's springs (METHOD.md section 4, legacy terms).
 
         Closed contacts: normal spring ``p_n E^T E`` with force ``-p_n g_n0 E^T``; stick:
-        shear spring ``p_s I^T I`` with force ``-p_s g_se I^T``; slip: the friction force
+        shear spring ``p_s I^T I`` with force ``-t_stick I^T`` (``t_stick``: the spring's
+        force at the step's start, :meth:`stick` with no increment); slip: the friction force
         ``-t_s I^T`` as a load.
 
         Returns
@@ -219,9 +247,9 @@ class ContactElement:
         k : (m, 12, 12) and f : (m, 12)
         """
         with section("contact_element"):
-            return self._legacy_contributions(state, g_se, t_s_slip)
+            return self._legacy_contributions(state, t_stick, t_s_slip)
 
-    def _legacy_contributions(self, state, g_se, t_s_slip):
+    def _legacy_contributions(self, state, t_stick, t_s_slip):
         closed = state != 0
         stick = state == STICK
         slip = state == SLIP
@@ -231,7 +259,7 @@ class ContactElement:
         k = kn[:, None, None] * (e[:, :, None] * e[:, None, :])
         k += ks[:, None, None] * (i[:, :, None] * i[:, None, :])
         fn = kn * self.gap0
-        fs = np.where(stick, ks * g_se, 0.0) + np.where(slip, t_s_slip, 0.0)
+        fs = np.where(stick, t_stick, 0.0) + np.where(slip, t_s_slip, 0.0)
         f = -(fn[:, None] * e + fs[:, None] * i)
         return k, f
 
@@ -262,7 +290,7 @@ class ContactElement:
         pn, ps = self.normal_penalty, self.shear_penalty
         t_n = np.where(closed, pn * kin.gap, 0.0)
         dgs = kin.shear - self.shear0
-        t_s, slipping, history, (kss, ksn) = self.laws.return_map(
+        t_s, slipping, history, (kss, ksn) = self.laws.return_map(  # the law's tangent too
             self.contacts.history, dgs, t_n, ps, self.length, where=closed, normal_penalty=pn)
         e, i = kin.e_row, kin.i_row
         residual = t_n[:, None] * e + t_s[:, None] * i

@@ -14,7 +14,8 @@ import numpy as np
 
 from dda._checks import finite_number
 
-__all__ = ["FrictionLaw", "FrictionTrial", "CoulombSingle", "StaticDynamicTransition"]
+__all__ = ["FrictionLaw", "FrictionTrial", "CoulombLike", "CoulombSingle",
+           "StaticDynamicTransition"]
 
 
 @dataclass
@@ -91,18 +92,112 @@ class FrictionLaw(ABC):
         """History after a step taken on the elastic (stick) branch without a return map.
 
         This is legacy DDA's way: a locked contact keeps its spring force even when it lies
-        above the strength, until it is pulled back at the start of the next step.
+        above the strength, until it is pulled back at the start of the next step. The
+        default keeps the elastic shear displacement in ``g_se``; a law that keeps it
+        elsewhere overrides this and :meth:`stick`.
         """
         state = {k: v.copy() for k, v in committed.items()}
         state["g_se"] = committed["g_se"] + delta_g_s
         return state
+
+    def stick(self, committed: dict[str, np.ndarray], delta_g_s: np.ndarray,
+              shear_penalty: np.ndarray) -> FrictionTrial:
+        """The trial of a contact locked on its elastic branch (no yield check).
+
+        Legacy DDA's stick spring: ``t_s = p_s (g_se + delta_g_s)`` with the history of
+        :meth:`elastic_update`. With ``delta_g_s = 0`` it is the shear force the spring
+        starts the step with. The solvers reach it through the contact element only.
+        """
+        state = self.elastic_update(committed, delta_g_s)
+        t_s = shear_penalty * state["g_se"]
+        return FrictionTrial(t_s=t_s, slipping=np.zeros(len(t_s), dtype=bool),
+                             strength=np.full(len(t_s), np.inf), state=state)
 
     def commit(self, trial: FrictionTrial) -> dict[str, np.ndarray]:
         """The history to carry into the next step once the step has converged."""
         return trial.state
 
 
-class CoulombSingle(FrictionLaw):
+class CoulombLike(FrictionLaw):
+    """A law defined by its shear strength alone: it inherits the return map and the tangent.
+
+    A trial ``t_tr = p_s (g_se + delta_g_s)`` above the strength ``S`` (:meth:`strength`)
+    slips, and is returned radially to the sliding strength ``S_d`` (:meth:`sliding_strength`,
+    ``S`` unless the law says otherwise)::
+
+        t_s = t_tr                    if |t_tr| <= S      (stick)
+        t_s = S_d sign(t_tr)          otherwise           (slip)
+
+    The history keeps the elastic shear displacement ``g_se = t_s / p_s`` and the accumulated
+    slip ``slip += |t_tr - t_s| / p_s``; :meth:`updated_history` adds a law's own fields. The
+    consistent tangent follows from the strength's slope ``dS_d / d|t_n|``
+    (:meth:`sliding_slope`): with ``t_n = p_n g_n`` in contact,
+
+        d t_s / d g_s = p_s (stick), 0 (slip)
+        d t_s / d g_n = 0 (stick), -p_n (dS_d / d|t_n|) sign(t_s) (slip)
+
+    A subclass gives :meth:`strength` and :meth:`strength_slope` (both vectorized over its
+    contacts; ``history`` is the committed history of those contacts), and optionally
+    :meth:`history_fields` and :meth:`updated_history`. Check it with
+    :func:`dda.contact.check_friction_law`.
+    """
+
+    @abstractmethod
+    def strength(self, t_n: np.ndarray, length: np.ndarray,
+                 history: dict[str, np.ndarray] | None = None) -> np.ndarray:
+        """Shear strength S a trial force is checked against (N per m), per contact."""
+
+    @abstractmethod
+    def strength_slope(self, t_n: np.ndarray, length: np.ndarray,
+                       history: dict[str, np.ndarray] | None = None):
+        """``dS / d|t_n|`` per contact (an array or a number)."""
+
+    def sliding_strength(self, t_n, length, history=None) -> np.ndarray:
+        """The strength a slipping trial is returned to (default: :meth:`strength`)."""
+        return self.strength(t_n, length, history)
+
+    def sliding_slope(self, t_n, length, history=None):
+        """``dS_d / d|t_n|`` of :meth:`sliding_strength` (default: :meth:`strength_slope`)."""
+        return self.strength_slope(t_n, length, history)
+
+    def slides(self, t_trial, strength, t_n, length, history, faces=None) -> np.ndarray:
+        """Which trials slip (default: ``|t_tr| > S`` contact by contact)."""
+        return np.abs(t_trial) > strength
+
+    def updated_history(self, history: dict[str, np.ndarray],
+                        slipping: np.ndarray) -> dict[str, np.ndarray]:
+        """The law's own history fields after a trial (``slipping`` all False on the stick
+        branch); ``g_se`` and ``slip`` are kept by the base. Default: none."""
+        return {}
+
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces=None):
+        t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
+        check = self.strength(t_n, length, committed)
+        slipping = self.slides(t_trial, check, t_n, length, committed, faces)
+        t_s = np.where(slipping, self.sliding_strength(t_n, length, committed)
+                       * np.sign(t_trial), t_trial)
+        state = {"g_se": t_s / shear_penalty,
+                 "slip": committed["slip"] + np.abs(t_trial - t_s) / shear_penalty}
+        state.update(self.updated_history(committed, slipping))
+        slope = self.sliding_slope(t_n, length, committed)
+        return FrictionTrial(t_s=t_s, slipping=slipping, strength=check, state=state,
+                             extra={"slope": slope})
+
+    def tangent(self, trial, normal_penalty, shear_penalty):
+        # t_n = p_n g_n < 0 in contact, so d|t_n|/d g_n = -p_n
+        dts_dgs = np.where(trial.slipping, 0.0, shear_penalty)
+        dts_dgn = np.where(trial.slipping,
+                           -normal_penalty * trial.extra["slope"] * np.sign(trial.t_s), 0.0)
+        return dts_dgs, dts_dgn
+
+    def elastic_update(self, committed, delta_g_s):
+        state = super().elastic_update(committed, delta_g_s)
+        state.update(self.updated_history(committed,
+                                          np.zeros(len(state["g_se"]), dtype=bool)))
+        return state
+
+
+class CoulombSingle(CoulombLike):
     """Coulomb friction with one angle and optional cohesion (METHOD.md section 4).
 
     Yield function ``f = |t_s| - (c l_c + |t_n| tan(phi))``; a trial above it is returned to
@@ -138,29 +233,15 @@ class CoulombSingle(FrictionLaw):
     def __repr__(self):
         return f"CoulombSingle(phi={self.phi}, cohesion={self.cohesion})"
 
-    def strength(self, t_n: np.ndarray, length: np.ndarray) -> np.ndarray:
+    def strength(self, t_n, length, history=None):
         """Shear strength ``c l_c + |t_n| tan(phi)`` for compressive t_n (zero force when open)."""
         return self.cohesion * length + np.maximum(-t_n, 0.0) * self.mu
 
-    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
-        t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
-        strength = self.strength(t_n, length)
-        slipping = np.abs(t_trial) > strength
-        t_s = np.where(slipping, strength * np.sign(t_trial), t_trial)
-        g_se = t_s / shear_penalty
-        slip = committed["slip"] + np.abs(t_trial - t_s) / shear_penalty
-        return FrictionTrial(
-            t_s=t_s, slipping=slipping, strength=strength, state={"g_se": g_se, "slip": slip}
-        )
-
-    def tangent(self, trial, normal_penalty, shear_penalty):
-        # t_n = p_n g_n < 0 in contact, so d|t_n|/d g_n = -p_n
-        dts_dgs = np.where(trial.slipping, 0.0, shear_penalty)
-        dts_dgn = np.where(trial.slipping, -normal_penalty * self.mu * np.sign(trial.t_s), 0.0)
-        return dts_dgs, dts_dgn
+    def strength_slope(self, t_n, length, history=None):
+        return self.mu
 
 
-class StaticDynamicTransition(FrictionLaw):
+class StaticDynamicTransition(CoulombLike):
     """Coulomb friction that drops from a static to a dynamic angle (METHOD.md section 6).
 
     - A sticking contact yields when ``|t_s^tr| > |t_n| tan(phi_static)``; the trial is then
@@ -235,33 +316,30 @@ class StaticDynamicTransition(FrictionLaw):
     def history_fields(self) -> dict[str, float]:
         return {"g_se": 0.0, "slip": 0.0, "sliding": 0.0}
 
-    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces=None):
-        t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
+    def strength(self, t_n, length, history=None):
+        """``|t_n| tan(phi_dynamic)`` on contacts sliding at the step's start, else
+        ``|t_n| tan(phi_static)``."""
         pressure = np.maximum(-t_n, 0.0)
-        sliding = committed["sliding"] > 0.5
-        dynamic = pressure * self.mu_dynamic
-        check = np.where(sliding, dynamic, pressure * self.mu_static)
+        return np.where(history["sliding"] > 0.5, pressure * self.mu_dynamic,
+                        pressure * self.mu_static)
+
+    def strength_slope(self, t_n, length, history=None):
+        return np.where(history["sliding"] > 0.5, self.mu_dynamic, self.mu_static)
+
+    def sliding_strength(self, t_n, length, history=None):
+        return np.maximum(-t_n, 0.0) * self.mu_dynamic
+
+    def sliding_slope(self, t_n, length, history=None):
+        return self.mu_dynamic
+
+    def slides(self, t_trial, strength, t_n, length, history, faces=None):
         if faces is None:
-            slipping = np.abs(t_trial) > check
-        else:
-            carried = np.where(sliding, np.clip(t_trial, -dynamic, dynamic), t_trial)
-            face_yields = np.abs(faces.total(carried)) > faces.total(check)
-            slipping = np.where(sliding, np.abs(t_trial) > dynamic, face_yields)
-        t_s = np.where(slipping, dynamic * np.sign(t_trial), t_trial)
-        state = {
-            "g_se": t_s / shear_penalty,
-            "slip": committed["slip"] + np.abs(t_trial - t_s) / shear_penalty,
-            "sliding": slipping.astype(float),
-        }
-        return FrictionTrial(t_s=t_s, slipping=slipping, strength=check, state=state)
+            return np.abs(t_trial) > strength
+        sliding = history["sliding"] > 0.5
+        dynamic = self.sliding_strength(t_n, length)
+        carried = np.where(sliding, np.clip(t_trial, -dynamic, dynamic), t_trial)
+        face_yields = np.abs(faces.total(carried)) > faces.total(strength)
+        return np.where(sliding, np.abs(t_trial) > dynamic, face_yields)
 
-    def tangent(self, trial, normal_penalty, shear_penalty):
-        dts_dgs = np.where(trial.slipping, 0.0, shear_penalty)
-        dts_dgn = np.where(trial.slipping,
-                           -normal_penalty * self.mu_dynamic * np.sign(trial.t_s), 0.0)
-        return dts_dgs, dts_dgn
-
-    def elastic_update(self, committed, delta_g_s):
-        state = super().elastic_update(committed, delta_g_s)
-        state["sliding"] = np.zeros_like(state["g_se"])
-        return state
+    def updated_history(self, history, slipping):
+        return {"sliding": slipping.astype(float)}

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dda.contact.contacts import OPEN, SLIP, STICK, ContactSet
+from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.open_close import open_close
 
@@ -33,25 +33,22 @@ class LegacyPullBack(NonlinearSolver):
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element
-        c = el.contacts
-        pn, ps, lc = el.normal_penalty, el.shear_penalty, el.length
-        laws = el.laws
         oc = open_close(problem, explicit=True)
         if not oc.converged:
             return StepSolution(None, None, False, oc.passes, oc.passes, oc.reason)
         if len(el) == 0:
-            return StepSolution(oc.d, c, True, oc.passes, oc.passes)
+            return StepSolution(oc.d, el.contacts, True, oc.passes, oc.passes)
         state, gap, dgs, history, d = oc.state, oc.gap, oc.dgs, oc.history, oc.d
         closed = state != OPEN
-        t_n = np.where(closed, np.minimum(pn * gap, 0.0), 0.0)
+        t_n = np.where(closed, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
         stick = state == STICK
         slip = state == SLIP
-        new_history = laws.elastic_update(history, dgs, stick)
-        t_s_slip, _, slip_history = laws.return_map(history, dgs, t_n, ps, lc, where=closed)
+        # sticking contacts keep their spring (no yield check: the pull-back of the next
+        # step cuts any excess); sliding ones are returned to the strength
+        t_stick, new_history = el.stick(history, dgs, where=stick)
+        t_s_slip, _, slip_history = el.friction(history, dgs, t_n, where=closed)
         for key, v in slip_history.items():
             new_history[key][slip] = v[slip]
-        t_s = np.where(stick, ps * new_history["g_se"], 0.0) + np.where(slip, t_s_slip, 0.0)
-        laws.initial_history(new_history, ~closed)
-        trial = ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s,
-                           new_history)
+        t_s = np.where(stick, t_stick, 0.0) + np.where(slip, t_s_slip, 0.0)
+        trial = el.trial_contacts(state, t_n, t_s, new_history)
         return StepSolution(d, trial, True, oc.passes, oc.passes)

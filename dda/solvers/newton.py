@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from dda._checks import finite_number
-from dda.contact.contacts import OPEN, SLIP, STICK, ContactSet
+from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.linear import SingularSystemError, assemble_and_solve, assemble_vector
 from dda.solvers.open_close import open_close
@@ -76,7 +76,6 @@ class NewtonRaphson(NonlinearSolver):
         trial, or a failed solution whose ``residual_norms`` show what happened.
         """
         el = problem.element
-        c = el.contacts
         free = problem.free
         d = d.copy()
         norms: list[float] = []
@@ -110,10 +109,7 @@ class NewtonRaphson(NonlinearSolver):
                 return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
             d = d + step
         state = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN).astype(np.int8)
-        history = resp.history
-        el.laws.initial_history(history, ~resp.closed)
-        trial = ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), resp.t_n,
-                           resp.t_s, history)
+        trial = el.trial_contacts(state, resp.t_n, resp.t_s, resp.history)
         return StepSolution(d, trial, True, 0, it, "", norms)
 
 

@@ -88,12 +88,14 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         z = np.zeros(0)
         return OpenCloseResult(True, 1, "", d, np.zeros(0, dtype=np.int8), z, z,
                                {k: v.copy() for k, v in c.history.items()})
-    pn, ps, lc = el.normal_penalty, el.shear_penalty, el.length
-    laws = el.laws
+    pn = el.normal_penalty
     closed0 = c.state != OPEN
     zero = np.zeros(m)
     # pull-back: last step's shear force above the strength is cut back to it here
-    _, over, history = laws.return_map(c.history, zero, c.t_n, ps, lc, where=closed0)
+    _, over, history = el.friction(c.history, zero, c.t_n, where=closed0)
+    # the stick springs' force at the step's start, from the pulled-back history (every
+    # contact: one that closes during the step starts from its law's initial history)
+    t_stick, _ = el.stick(history, zero, where=np.ones(m, dtype=bool))
     state = c.state.copy()
     state[closed0 & over] = SLIP
     # legacy's explicit rule spares only the contacts that start the step sticking
@@ -111,9 +113,9 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         slip = state == SLIP
         # evaluated on every closed contact (used on the sliding ones): a law that judges
         # faces needs a face's sticking contacts too
-        t_slip, _, _ = laws.return_map(history, dgs_prev, t_n_lag, ps, lc, where=state != OPEN)
+        t_slip, _, _ = el.friction(history, dgs_prev, t_n_lag, where=state != OPEN)
         t_slip = np.where(slip, t_slip, 0.0)
-        k, f = el.legacy_contributions(state, history["g_se"], t_slip)
+        k, f = el.legacy_contributions(state, t_stick, t_slip)
         try:
             d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
                                    el.bk, k, f, problem.d_known, problem.pattern)
@@ -131,7 +133,7 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         # pass opened it (a slab bounced into its floor by a brick stayed open 1.4 mm deep)
         new_state = np.where(closed, np.where(state == OPEN, STICK, state), OPEN).astype(np.int8)
         check = closed & ~(spared & closed0) & ~noise
-        t_trial, slipping, _ = laws.return_map(history, dgs, t_n, ps, lc, where=check)
+        t_trial, slipping, _ = el.friction(history, dgs, t_n, where=check)
         # a slip that reverses against the friction load of this pass sticks
         reversed_ = (state == SLIP) & (np.sign(t_trial) != np.sign(t_slip))
         new_state[check] = np.where(slipping[check] & ~reversed_[check], SLIP, STICK)

@@ -1,0 +1,203 @@
+"""Check any friction law the way the test suite checks the package's own.
+
+:func:`check_friction_law` samples contacts that stick and contacts that slip, fresh and with a
+history, and checks what the solvers rely on: the consistent tangent against central finite
+differences, a committed history that no trial touches, results that do not depend on how
+many contacts are evaluated together, the stick branch, and a law that survives pickling
+(checkpoints and parallel sweeps copy it).
+"""
+
+from __future__ import annotations
+
+import copy
+import pickle
+
+import numpy as np
+
+from dda.contact.friction import FrictionLaw, FrictionTrial
+
+__all__ = ["check_friction_law"]
+
+
+def check_friction_law(law, *, normal_forces=(1e2, 1e6), normal_penalty: float = 1e10,
+                       shear_penalty: float = 1e9, contacts: int = 64, rtol: float = 1e-5,
+                       seed: int = 0) -> None:
+    """Check a friction law instance; raise ``AssertionError`` saying what is wrong.
+
+    Parameters
+    ----------
+    law : FrictionLaw
+        The instance to check, with the parameters it will run with.
+    normal_forces : (float, float)
+        Range of the compressive normal forces ``|t_n|`` sampled (N per m, log-uniform). The
+        shear trials range over ``-3 |t_n| .. 3 |t_n|``, so a law that never slips (or never
+        sticks) there should be given forces where it does.
+    normal_penalty, shear_penalty : float
+        ``p_n`` and ``p_s`` of the sampled contacts (N/m).
+    contacts : int
+        Number of sampled contacts per history.
+    rtol : float
+        Relative tolerance of the tangent against finite differences (the absolute part is
+        ``1e-6 p``).
+    seed : int
+        Seed of the sample (the check is deterministic).
+
+    Returns
+    -------
+    None
+        When every check passes.
+
+    Examples
+    --------
+    >>> from dda.contact import CoulombSingle, check_friction_law
+    >>> check_friction_law(CoulombSingle(phi=30.0, cohesion=1e4))
+    """
+    _assert(isinstance(law, FrictionLaw),
+            f"{law!r} is not a dda.contact.FrictionLaw (subclass FrictionLaw or CoulombLike)")
+    rng = np.random.default_rng(seed)
+    n = int(contacts)
+    pn, ps = np.full(n, float(normal_penalty)), np.full(n, float(shear_penalty))
+    lo, hi = np.log10(normal_forces[0]), np.log10(normal_forces[1])
+    t_n = -(10.0 ** rng.uniform(lo, hi, n))
+    length = rng.uniform(0.05, 1.0, n)
+    fields = _check_history_fields(law, n)
+    fresh = law.initial_state(n)
+    # a used history: one step of random shear from the fresh state, committed
+    first = law.return_map(fresh, rng.uniform(-3, 3, n) * -t_n / ps, t_n, ps, length)
+    used = {k: np.asarray(v, dtype=float).copy() for k, v in law.commit(first).items()}
+    _assert(set(used) == set(fields),
+            f"{law!r}: commit() gives the fields {sorted(used)}, history_fields() "
+            f"{sorted(fields)}")
+    counts = np.zeros(2, dtype=int)  # tangent checks made on sticking and slipping contacts
+    for committed in (fresh, used):
+        dgs = rng.uniform(-3, 3, n) * -t_n / ps
+        trial = _check_trial(law, committed, dgs, t_n, ps, pn, length, fields)
+        _check_vectorized(law, committed, dgs, t_n, ps, length, trial)
+        _check_stick(law, committed, dgs, t_n, ps, length, trial, fields)
+        counts += _check_tangent(law, committed, dgs, t_n, pn, ps, length, trial, rtol)
+    _assert(counts[0] > 0 and counts[1] > 0,
+            f"{law!r}: of the sampled trials {counts[0]} stuck and {counts[1]} slipped away "
+            "from the yield surface; the tangent must be checked on both branches: give "
+            "check_friction_law normal_forces where the law does both")
+    _check_pickle(law, used, t_n, ps, length)
+
+
+def _assert(ok, message):
+    if not ok:
+        raise AssertionError(message)
+
+
+def _check_history_fields(law, n):
+    fields = law.history_fields()
+    _assert(isinstance(fields, dict) and all(isinstance(k, str) for k in fields),
+            f"{law!r}: history_fields() must be a dict of field name to initial value")
+    state = law.initial_state(n)
+    _assert(set(state) == set(fields),
+            f"{law!r}: initial_state() gives {sorted(state)}, history_fields() {sorted(fields)}")
+    for k, v in state.items():
+        v = np.asarray(v)
+        _assert(v.shape == (n,) and np.all(np.isfinite(v)),
+                f"{law!r}: initial_state({n})[{k!r}] must be {n} finite numbers, got shape "
+                f"{v.shape}")
+    return fields
+
+
+def _check_trial(law, committed, dgs, t_n, ps, pn, length, fields):
+    """A trial of the right shapes that leaves its inputs alone; its tangent too."""
+    inputs = (committed, dgs, t_n, ps, length)
+    before = copy.deepcopy(inputs)
+    trial = law.return_map(committed, dgs, t_n, ps, length)
+    law.tangent(trial, pn, ps)
+    law.stick(committed, dgs, ps)
+    law.commit(trial)
+    for name, a, b in zip(("committed history", "delta_g_s", "t_n", "shear_penalty",
+                           "length"), before, inputs, strict=True):
+        same = (all(np.array_equal(a[k], b[k]) for k in a) and set(a) == set(b)
+                if isinstance(a, dict) else np.array_equal(a, b))
+        _assert(same, f"{law!r}: a trial changed its input {name} (a trial must be built "
+                      "from the committed history and leave it untouched: copy before writing)")
+    _assert(isinstance(trial, FrictionTrial), f"{law!r}: return_map must return a FrictionTrial")
+    n = len(dgs)
+    for name in ("t_s", "slipping", "strength"):
+        value = np.asarray(getattr(trial, name))
+        _assert(value.shape == (n,), f"{law!r}: trial.{name} has shape {value.shape}, "
+                                     f"expected ({n},): one value per contact")
+    _assert(np.all(np.isfinite(trial.t_s)), f"{law!r}: non-finite shear force in a trial")
+    state = law.commit(trial)
+    _assert(set(state) == set(fields), f"{law!r}: a committed trial has the fields "
+                                       f"{sorted(state)}, history_fields() {sorted(fields)}")
+    return trial
+
+
+def _check_vectorized(law, committed, dgs, t_n, ps, length, trial):
+    """Each contact's result is the same evaluated alone as among all the others."""
+    state = law.commit(trial)
+    for i in range(0, len(dgs), max(1, len(dgs) // 8)):
+        s = slice(i, i + 1)
+        one = law.return_map({k: v[s] for k, v in committed.items()}, dgs[s], t_n[s], ps[s],
+                             length[s])
+        close = (np.allclose(one.t_s, trial.t_s[s], rtol=1e-12, atol=0.0)
+                 and np.array_equal(one.slipping, trial.slipping[s])
+                 and all(np.allclose(v, state[k][s], rtol=1e-12, atol=1e-300)
+                         for k, v in law.commit(one).items()))
+        _assert(close, f"{law!r}: contact {i} evaluated alone differs from the same contact "
+                       "evaluated with the others (the law must be vectorized element-wise)")
+
+
+def _check_stick(law, committed, dgs, t_n, ps, length, trial, fields):
+    """On a sticking trial the stick branch gives the return map's force."""
+    stick = law.stick(committed, dgs, ps)
+    _assert(set(law.commit(stick)) == set(fields),
+            f"{law!r}: stick() gives the fields {sorted(stick.state)}, history_fields() "
+            f"{sorted(fields)}")
+    held = ~np.asarray(trial.slipping)
+    _assert(np.allclose(stick.t_s[held], trial.t_s[held], rtol=1e-10, atol=0.0),
+            f"{law!r}: stick() and return_map() disagree on contacts that stick (legacy DDA "
+            "uses stick() for a locked spring)")
+
+
+def _check_tangent(law, committed, dgs, t_n, pn, ps, length, trial, rtol):
+    """d t_s / d g_s and d t_s / d g_n against central differences, away from kinks."""
+    k_ss, k_sn = (np.asarray(a, dtype=float) for a in law.tangent(trial, pn, ps))
+    g_n = t_n / pn
+    h_s = 1e-6 * np.abs(t_n) / ps
+    h_n = 1e-6 * np.abs(g_n)
+
+    def at(dgs_, g_n_):
+        return law.return_map(committed, dgs_, pn * g_n_, ps, length)
+
+    plus_s, minus_s = at(dgs + h_s, g_n), at(dgs - h_s, g_n)
+    plus_n, minus_n = at(dgs, g_n + h_n), at(dgs, g_n - h_n)
+    fd_s = (plus_s.t_s - minus_s.t_s) / (2 * h_s)
+    fd_n = (plus_n.t_s - minus_n.t_s) / (2 * h_n)
+    slipping = np.asarray(trial.slipping)
+    # a branch switch inside the difference has no derivative: skip those contacts
+    smooth = np.ones(len(dgs), dtype=bool)
+    for other in (plus_s, minus_s, plus_n, minus_n):
+        smooth &= np.asarray(other.slipping) == slipping
+    bad_s = np.abs(k_ss - fd_s) > rtol * np.abs(fd_s) + 1e-6 * ps
+    bad_n = np.abs(k_sn - fd_n) > rtol * np.abs(fd_n) + 1e-6 * pn
+    for name, bad, analytic, fd in (("d t_s / d g_s", bad_s, k_ss, fd_s),
+                                    ("d t_s / d g_n", bad_n, k_sn, fd_n)):
+        wrong = np.flatnonzero(bad & smooth)
+        if len(wrong):
+            i = int(wrong[0])
+            branch = "slipping" if slipping[i] else "sticking"
+            raise AssertionError(
+                f"{law!r}: tangent {name} of a {branch} contact is {analytic[i]:.6g}, finite "
+                f"differences give {fd[i]:.6g} ({len(wrong)} of {len(dgs)} contacts wrong; "
+                f"t_n = {t_n[i]:.4g}, delta_g_s = {dgs[i]:.4g})")
+    return np.array([np.count_nonzero(smooth & ~slipping), np.count_nonzero(smooth & slipping)])
+
+
+def _check_pickle(law, committed, t_n, ps, length):
+    try:
+        copy_ = pickle.loads(pickle.dumps(law))
+    except Exception as exc:  # pickle raises several types
+        raise AssertionError(f"{law!r} cannot be pickled ({type(exc).__name__}: {exc}); "
+                             "checkpoints and parallel sweeps copy laws by pickling") from None
+    dgs = 2.0 * -t_n / ps
+    a = law.return_map(committed, dgs, t_n, ps, length)
+    b = copy_.return_map(committed, dgs, t_n, ps, length)
+    _assert(np.array_equal(a.t_s, b.t_s) and np.array_equal(a.slipping, b.slipping),
+            f"{law!r}: a pickled copy of the law gives other forces than the law")

@@ -1,0 +1,130 @@
+"""check_friction_law: passes on every law of the package, fails on each kind of broken law."""
+
+import inspect
+
+import numpy as np
+import pytest
+
+import dda.contact as contact
+from dda.contact import (
+    BartonBandis,
+    CoulombLike,
+    CoulombSingle,
+    FrictionLaw,
+    StaticDynamicTransition,
+    check_friction_law,
+)
+from examples.my_laws import BrittleCohesion
+
+PACKAGE_LAWS = [
+    CoulombSingle(phi=30.0),
+    CoulombSingle(phi=36.4, cohesion=1e4),
+    StaticDynamicTransition(phi_static=30.0, phi_dynamic=20.0),
+    StaticDynamicTransition(phi_static=40.0, phi_dynamic=30.0, onset="face"),
+    BartonBandis(jrc=10.0, jcs=50e6, phi_r=25.0),
+    BartonBandis(jrc=15.0, jcs=100e6, phi_r=30.0, mobilized=False),
+    BartonBandis(jrc=8.0, jcs=80e6, phi_r=28.0, dilation=True),
+]
+
+
+@pytest.mark.parametrize("law", PACKAGE_LAWS + [BrittleCohesion(30.0, 5e4)], ids=repr)
+def test_every_law_passes(law):
+    assert check_friction_law(law) is None
+
+
+def test_every_law_class_of_the_package_is_checked():
+    classes = {obj for _, obj in inspect.getmembers(contact, inspect.isclass)
+               if issubclass(obj, FrictionLaw) and not inspect.isabstract(obj)}
+    assert classes == {type(law) for law in PACKAGE_LAWS}
+
+
+class _Broken(CoulombSingle):
+    """Coulomb with one defect switched on by ``kind``."""
+
+    def __init__(self, kind):
+        super().__init__(phi=30.0)
+        self.kind = kind
+        if kind == "unpicklable":
+            self.hook = lambda x: x
+
+    def __repr__(self):
+        return f"_Broken({self.kind!r})"
+
+    def strength_slope(self, t_n, length, history=None):
+        return 1.1 * self.mu if self.kind == "slope" else self.mu
+
+    def strength(self, t_n, length, history=None):
+        s = super().strength(t_n, length, history)
+        if self.kind == "not vectorized":  # the strength of the whole batch's mean pressure
+            s = np.full_like(s, np.mean(s))
+        if self.kind == "never slips":
+            s = s + 1e12
+        return s
+
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces=None):
+        trial = super().return_map(committed, delta_g_s, t_n, shear_penalty, length, faces)
+        if self.kind == "mutates":
+            committed["g_se"] += delta_g_s
+        return trial
+
+    def stick(self, committed, delta_g_s, shear_penalty):
+        trial = super().stick(committed, delta_g_s, shear_penalty)
+        if self.kind == "stick":
+            trial.t_s = 2.0 * trial.t_s
+        return trial
+
+
+@pytest.mark.parametrize("kind, message", [
+    ("slope", "tangent d t_s / d g_n of a slipping contact"),
+    ("mutates", "changed its input committed history"),
+    ("not vectorized", "evaluated alone differs"),
+    ("never slips", "0 slipped"),
+    ("stick", "stick\\(\\) and return_map\\(\\) disagree"),
+    ("unpicklable", "cannot be pickled"),
+])
+def test_each_defect_is_named(kind, message):
+    with pytest.raises(AssertionError, match=message):
+        check_friction_law(_Broken(kind))
+    check_friction_law(_Broken("none"))  # the same class without the defect passes
+
+
+class WrongStick(CoulombSingle):
+    def tangent(self, trial, normal_penalty, shear_penalty):
+        k_ss, k_sn = super().tangent(trial, normal_penalty, shear_penalty)
+        return 0.5 * k_ss, k_sn
+
+
+def test_a_wrong_stick_tangent_is_found():
+    with pytest.raises(AssertionError, match="d t_s / d g_s of a sticking contact"):
+        check_friction_law(WrongStick(phi=30.0))
+
+
+def test_a_non_law_is_refused():
+    with pytest.raises(AssertionError, match="not a dda.contact.FrictionLaw"):
+        check_friction_law(object())
+
+
+class Capped(CoulombLike):
+    """A strength that saturates: S = 1e5 tanh(|t_n| / 1e5)."""
+
+    def strength(self, t_n, length, history=None):
+        return 1e5 * np.tanh(np.maximum(-t_n, 0.0) / 1e5)
+
+    def strength_slope(self, t_n, length, history=None):
+        return 1.0 / np.cosh(np.maximum(-t_n, 0.0) / 1e5) ** 2
+
+    def __repr__(self):
+        return "Capped()"
+
+
+class CappedWrongSlope(Capped):
+    def strength_slope(self, t_n, length, history=None):
+        return np.ones_like(t_n)
+
+
+def test_coulomb_like_needs_only_the_strength():
+    """A law that gives strength and slope inherits the return map and the tangent; a wrong
+    slope is caught."""
+    check_friction_law(Capped())
+    with pytest.raises(AssertionError, match="d t_s / d g_n of a slipping contact"):
+        check_friction_law(CappedWrongSlope())
