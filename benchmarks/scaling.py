@@ -153,7 +153,7 @@ def one(case: str, size: int, solver: str, steps: int, warm: int, dt: float,
     step = float(np.median(st["wall_time"]))
     prof = result.profile()
     return {
-        "case": case, "blocks": sim.n_blocks - 1, "solver": solver, "steps": len(st),
+        "case": case, "blocks": sim.model.n_blocks - 1, "solver": solver, "steps": len(st),
         "unknowns": int(last["rhs"].size), "contacts": int(np.median(st["contacts"])),
         "closed": int(np.median(st["closed"])), "step_ms": 1e3 * step,
         "floor_ms": 1e3 * floor, "spsolve_ms": 1e3 * float(np.median(defaults)),

@@ -48,7 +48,7 @@ def _resume(path, duration, progress):
     from dda.simulation import Simulation
 
     sim = Simulation.resume(path)
-    print(f"{path}: resuming at t = {sim.state.time:g} s")
+    print(f"{path}: resuming at t = {sim.committed.time:g} s")
     result = sim.run(duration, progress=progress)
     print(result.stats.summary())
     return result
@@ -112,22 +112,23 @@ def describe(loaded, timed_steps: int = 3) -> str:
 
     scene = loaded.scene
     sim = loaded.simulation()
-    inputs = scene._blocks
+    model = sim.model
+    inputs = scene.block_inputs
     n = len(inputs)
-    fixed = int(np.count_nonzero(~sim.free))
-    rigid = sum(1 for i, b in enumerate(inputs) if b.rigid and sim.free[i])
-    unknowns = 6 * int(np.count_nonzero(sim.free)) - 3 * rigid
-    size = float(np.max(sim.size))
-    touch = narrow_phase(sim.state.x, sim.topo, 1e-6 * size, 1e-6 * size)
-    laws = ", ".join(sorted({type(law).__name__ for law in sim.laws}))
+    fixed = int(np.count_nonzero(~model.free))
+    rigid = sum(1 for i, b in enumerate(inputs) if b.rigid and model.free[i])
+    unknowns = 6 * int(np.count_nonzero(model.free)) - 3 * rigid
+    size = float(np.max(model.size))
+    touch = narrow_phase(model.x_initial, model.topo, 1e-6 * size, 1e-6 * size)
+    laws = ", ".join(sorted({type(law).__name__ for law in model.joints.laws}))
     lines = [
         f"scene      {loaded.path}",
         f"blocks     {n} ({n - fixed} free of which {rigid} rigid, {fixed} fixed or moved)",
-        f"vertices   {len(sim.state.x)}",
+        f"vertices   {len(model.x_initial)}",
         f"unknowns   {unknowns}",
         f"contacts   {len(touch)} vertex-edge pairs touching at the start "
         f"({touch.pairs} block pairs)",
-        f"joints     {len(sim.joint_pn)} ({laws})",
+        f"joints     {len(model.joints.normal_penalty)} ({laws})",
         f"effects    {', '.join(loaded.effects) or 'none'}",
         f"solver     {loaded.solver!r}, dt {sim.dt:g} s, {sim.analysis}",
     ]

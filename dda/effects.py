@@ -146,10 +146,45 @@ class AccelerationHistory:
                 f"run goes to t = {t_end:g} s; extend the record or shorten the run"
             )
 
+    def initial(self):
+        """The integrator's state at t = 0: ``(t, v, u)`` for a callable, None for a record
+        (whose integrals are exact at any t)."""
+        return None if self._callable is None else (0.0, np.zeros(2), np.zeros(2))
+
+    def advance(self, start, t: float):
+        """Displacement and velocity at ``t``, and the integrator's state there (pure).
+
+        ``start`` is the integrator's state at an earlier time (:meth:`initial`, or the last
+        one returned); nothing of the history changes, so a step that is refused simply
+        keeps its ``start``. A callable is integrated from ``start`` to ``t`` exactly::
+
+            u(t) = u0 + v0 h + int_0^h (h - s) a(t0 + s) ds,   v(t) = v0 + int_0^h a(t0 + s) ds
+        """
+        if self._callable is None:
+            u, v = self._sampled(t)
+            return u, v, None
+        t0, v0, u0 = start
+        if t < t0 - 1e-15:
+            t0, v0, u0 = 0.0, np.zeros(2), np.zeros(2)
+        h = t - t0
+        if h <= 0.0:
+            return u0.copy(), v0.copy(), (t0, v0, u0)
+        s = h * _GL_X
+        a = np.array([_as_xy(self._callable(t0 + si), f"{self.name}: acceleration(t)")
+                      for si in s])
+        v = v0 + h * (_GL_W @ a)
+        u = u0 + v0 * h + h * ((_GL_W * (h - s)) @ a)
+        return u.copy(), v.copy(), (t, v, u)
+
     def state(self, t: float) -> tuple[np.ndarray, np.ndarray]:
-        """Displacement and velocity at time t (callables must be queried in increasing t)."""
-        if self._callable is not None:
-            return self._advance_callable(t)
+        """Displacement and velocity at time t (callables must be queried in increasing t;
+        the simulation uses the pure :meth:`advance`)."""
+        if self._callable is None:
+            return self._sampled(t)
+        u, v, (self._t, self._v, self._u) = self.advance((self._t, self._v, self._u), t)
+        return u, v
+
+    def _sampled(self, t):
         ts = self._times
         i = int(np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2))
         s = t - ts[i]
@@ -159,31 +194,6 @@ class AccelerationHistory:
         v = self._vel[i] + a0 * s + 0.5 * slope * s * s
         u = self._disp[i] + self._vel[i] * s + 0.5 * a0 * s * s + slope * s**3 / 6.0
         return u, v
-
-    def _advance_callable(self, t):
-        # u(t) = u0 + v0 h + int_0^h (h - s) a(t0 + s) ds,  v(t) = v0 + int_0^h a(t0 + s) ds
-        if t < self._t - 1e-15:
-            self._t, self._v, self._u = 0.0, np.zeros(2), np.zeros(2)
-        h = t - self._t
-        if h <= 0.0:
-            return self._u.copy(), self._v.copy()
-        s = h * _GL_X
-        a = np.array([_as_xy(self._callable(self._t + si), f"{self.name}: acceleration(t)")
-                      for si in s])
-        v = self._v + h * (_GL_W @ a)
-        u = self._u + self._v * h + h * ((_GL_W * (h - s)) @ a)
-        self._t, self._v, self._u = t, v, u
-        return u.copy(), v.copy()
-
-    def snapshot(self):
-        """Internal integration state, to restore on a reverted step."""
-        if self._callable is None:
-            return None
-        return (self._t, self._v.copy(), self._u.copy())
-
-    def restore(self, snap):
-        if snap is not None:
-            self._t, self._v, self._u = snap[0], snap[1].copy(), snap[2].copy()
 
 
 class DisplacementHistory:

@@ -37,8 +37,11 @@ class Energy:
         return self.kinetic + self.potential + self.strain + self.contact
 
 
-def energy(sim) -> Energy:
-    """The energy of ``sim``'s committed state (see the module docstring).
+def energy(sim, state=None) -> Energy:
+    """The energy of a committed state (see the module docstring).
+
+    ``sim`` is a :class:`dda.Simulation` (its committed state), or a :class:`dda.model.Model`
+    with ``state`` the :class:`dda.step.StepState` to measure.
 
     Fixed and shaken blocks count too: their kinetic energy is that of the prescribed motion.
 
@@ -55,20 +58,21 @@ def energy(sim) -> Energy:
     >>> round(e.kinetic + e.potential, 6), round(e.potential, 1)
     (5000.0, 4500.0)
     """
-    st = sim.state
-    ints = geometry.polygon_integrals(st.x, sim.offsets)
-    mass = geometry.mass_matrices(ints, sim.density)
+    model = getattr(sim, "model", sim)
+    st = sim.committed if state is None else state
+    ints = geometry.polygon_integrals(st.x, model.offsets)
+    mass = geometry.mass_matrices(ints, model.density)
     kinetic = 0.5 * float(np.einsum("bi,bij,bj->", st.velocity, mass, st.velocity))
-    g = sim.scene.gravity or 0.0
-    potential = float(np.sum(g * sim.density * ints.area * ints.centroid[:, 1]))
-    compliance = np.linalg.inv(sim.elasticity)
+    g = model.gravity or 0.0
+    potential = float(np.sum(g * model.density * ints.area * ints.centroid[:, 1]))
+    compliance = np.linalg.inv(model.elasticity)
     strain = 0.5 * float(np.einsum("b,bi,bij,bj->", ints.area, st.stress, compliance,
                                    st.stress))
     c = st.contacts
     closed = c.state != OPEN
     contact = 0.0
     if closed.any():
-        joint = sim._joint_index(c.bj[closed], c.bk[closed])
-        contact = 0.5 * float(np.sum(c.t_n[closed] ** 2 / sim.joint_pn[joint]
-                                     + c.t_s[closed] ** 2 / sim.joint_ps[joint]))
+        joint = model.joint_index(c.bj[closed], c.bk[closed])
+        contact = 0.5 * float(np.sum(c.t_n[closed] ** 2 / model.joints.normal_penalty[joint]
+                                     + c.t_s[closed] ** 2 / model.joints.shear_penalty[joint]))
     return Energy(kinetic, potential, strain, contact)

@@ -20,10 +20,12 @@ would do and why:
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
-__all__ = ["PenaltyWarning", "soft_penalty_advice", "stiff_penalty_advice", "contact_cut"]
+__all__ = ["PenaltyAdvisor", "PenaltyWarning", "soft_penalty_advice", "stiff_penalty_advice",
+           "contact_cut"]
 
 SOFT_DEPTH = 0.05
 TARGET_DEPTH = 0.01
@@ -126,3 +128,55 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
             f"2 m / dt^2 = {inertia:.3g} N/m of {name} (the lightest free block). A penalty of "
             f"about {_nice(STIFF_RATIO * inertia)} N/m at dt = {dt:g} s, or dt = {dt_ok:.3g} s "
             "at this penalty, keeps the springs from dominating the step.")
+
+
+class PenaltyAdvisor:
+    """Watches the committed steps of a run and warns (once each) when the penalty is wrong.
+
+    Parameters
+    ----------
+    model : dda.model.Model
+    dt : the step size asked for (s)
+    """
+
+    def __init__(self, model, dt: float):
+        self.model = model
+        self.dt = dt
+        self.warned: set[str] = set()
+
+    def observe(self, state, steps: int, contact_cuts: int) -> None:
+        """Look at a committed :class:`dda.step.StepState` after ``steps`` steps, of which
+        ``contact_cuts`` were cut because the contacts would not settle."""
+        if "soft" not in self.warned:
+            self._check_soft(state.contacts)
+        if ("stiff" not in self.warned and contact_cuts >= STIFF_CUTS
+                and contact_cuts >= STIFF_SHARE * steps and self.model.free.any()):
+            self._check_stiff(steps, contact_cuts)
+
+    def _check_soft(self, c):
+        model = self.model
+        closed = np.flatnonzero(c.state != 0)
+        if len(closed) == 0:
+            return
+        pn = model.joints.normal_penalty[model.joint_index(c.bj[closed], c.bk[closed])]
+        depth = -c.t_n[closed] / pn
+        half = np.minimum(model.thickness[c.bj[closed]], model.thickness[c.bk[closed]])
+        if not np.any(depth > SOFT_DEPTH * half):
+            return
+        names = [f"{model.block_label(j)} on {model.block_label(k)}"
+                 for j, k in zip(c.bj[closed], c.bk[closed], strict=True)]
+        message = soft_penalty_advice(depth, half, pn, names)
+        if message:
+            self.warned.add("soft")
+            warnings.warn(message, PenaltyWarning, stacklevel=5)
+
+    def _check_stiff(self, steps, contact_cuts):
+        model = self.model
+        mass = model.density * model.size**2  # the blocks' masses at the start
+        light = int(np.flatnonzero(model.free)[np.argmin(mass[model.free])])
+        message = stiff_penalty_advice(contact_cuts, steps,
+                                       float(model.joints.normal_penalty.max()),
+                                       float(mass[light]), self.dt, model.block_label(light))
+        if message:
+            self.warned.add("stiff")
+            warnings.warn(message, PenaltyWarning, stacklevel=5)

@@ -19,7 +19,7 @@ def _reference_block(result, relative_to):
     (a shaking table: what matters is how far the blocks move on it), else none."""
     scene = result.scene
     if relative_to == "auto":
-        shaken = [s.block for s in scene._shakes]
+        shaken = [s.block for s in scene.shakes]
         return scene.blocks[shaken[0]] if shaken else None
     return None if relative_to is None else scene.block(relative_to)
 

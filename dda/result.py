@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dda.contact.contacts import pair_key
 from dda.profiling import SECTIONS
 
 __all__ = ["Result", "StepStats", "Frame", "CostProfile"]
@@ -115,7 +116,7 @@ class Result:
     def record(self, time, displacement, rotation, velocity, stress, pair_keys, pair_force,
                pair_normal):
         """Keep one step: per block (n_blocks, ...) arrays, and the per-pair joint forces
-        of :meth:`dda.Simulation._pair_forces`. The arrays are copied."""
+        of :func:`dda.recorder.pair_forces`. The arrays are copied."""
         self._time.append(float(time))
         self._disp.append(np.array(displacement))
         self._rot.append(np.array(rotation))
@@ -161,8 +162,7 @@ class Result:
         b points in +x). Both values are the same for (a, b) and (b, a).
         """
         ia, ib = self._index(a), self._index(b)
-        lo, hi = min(ia, ib), max(ia, ib)
-        key = lo * len(self._names) + hi
+        key = int(pair_key(ia, ib, len(self._names)))
         out = np.zeros((len(self._time), 2))
         for i, (keys, force, normal) in enumerate(self._pairs):
             pos = np.searchsorted(keys, key)
@@ -172,7 +172,7 @@ class Result:
                 if norm == 0.0:
                     continue
                 n = n / norm
-                f = force[pos]  # force on block hi from block lo
+                f = force[pos]  # force on the higher-index block from the other
                 out[i, 0] = f @ n
                 out[i, 1] = f @ np.array([n[1], -n[0]])
         return out

@@ -365,6 +365,38 @@ class Scene:
             return None
         return alpha, beta
 
+    # ------------------------------------------------------------------ read access
+    # what the scene holds, read by dda.model.Model and the tools (tuples: read only)
+    @property
+    def block_inputs(self) -> tuple:
+        """Per block: vertices, material, fixed, velocity, angular_velocity, rigid."""
+        return tuple(self._blocks)
+
+    @property
+    def shakes(self) -> tuple:
+        """The shaken blocks: ``(block index, AccelerationHistory)`` records."""
+        return tuple(self._shakes)
+
+    @property
+    def motions(self) -> tuple:
+        """The prescribed motions: block index, displacement history, penalty, points."""
+        return tuple(self._motions)
+
+    @property
+    def point_loads(self) -> tuple:
+        """The point loads: block index, point, force history."""
+        return tuple(self._loads)
+
+    @property
+    def default_joint(self) -> JointMaterial | None:
+        """The joint of every pair that has none of its own."""
+        return self._joints.default
+
+    @property
+    def pair_joints(self) -> dict:
+        """``{(a, b): JointMaterial}`` with a < b block indices: the pairs' own joints."""
+        return dict(self._joints.pairs)
+
     # ------------------------------------------------------------------ checks
     def joint_for(self, a: int, b: int) -> JointMaterial:
         """The joint between blocks a and b (the pair's, or the default)."""

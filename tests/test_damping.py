@@ -119,12 +119,12 @@ def test_stiffness_damping_gives_the_damping_ratio_beta_omega_over_2():
 
 def test_a_scene_without_damping_has_no_damping_term():
     scene, _ = flying_block()
-    assert dda.Simulation(scene, dt=0.01).damping is None  # zero coefficients: no term
+    assert dda.Simulation(scene, dt=0.01).model.damping is None  # zero coefficients: no term
     scene = dda.Scene()
     scene.add_block(box(0, 0, 1, 1), ROCK)
-    assert dda.Simulation(scene, dt=0.01).damping is None
+    assert dda.Simulation(scene, dt=0.01).model.damping is None
     scene.set_damping(mass=1.0)
-    alpha, beta = dda.Simulation(scene, dt=0.01).damping
+    alpha, beta = dda.Simulation(scene, dt=0.01).model.damping
     assert alpha.tolist() == [1.0] and beta.tolist() == [0.0]
 
 

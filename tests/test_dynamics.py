@@ -32,7 +32,7 @@ def test_free_spin_keeps_area_and_speed():
     b = scene.add_block(box(0, 0, 2, 1), rock, angular_velocity=1.0)
     sim = dda.Simulation(scene, dt=1e-2)
     result = sim.run(duration=10.0)
-    area = geometry.polygon_integrals(sim.state.x, sim.offsets).area[0]
+    area = geometry.polygon_integrals(sim.state.x, sim.model.offsets).area[0]
     assert abs(area - 2.0) / 2.0 < 0.005
     assert area == pytest.approx(2.0, rel=1e-9)  # the finite-rotation update is exact
     assert result.rotation(b)[-1] == pytest.approx(10.0, rel=1e-9)

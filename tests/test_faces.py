@@ -35,7 +35,7 @@ def shaken(uppers, duration=0.3):
 def faces_of(sim):
     c = sim.state.contacts
     closed = c.state != 0
-    faces = contact_faces(sim.state.x, c.vertex, c.edge, sim.topo.nxt, sim.topo.prv)
+    faces = contact_faces(sim.state.x, c.vertex, c.edge, sim.model.topo.nxt, sim.model.topo.prv)
     return faces.subset(np.flatnonzero(closed)), c.t_s[closed], c.bj[closed]
 
 

@@ -14,10 +14,19 @@ import numpy as np
 from dda.contact.detection import CandidateContacts
 from dda.contact.kinematics import ContactGeometry, contact_geometry
 
-__all__ = ["OPEN", "STICK", "SLIP", "ContactSet", "carry_over"]
+__all__ = ["OPEN", "STICK", "SLIP", "ContactSet", "carry_over", "pair_key"]
 
 OPEN, STICK, SLIP = 0, 1, 2
 STATE_NAMES = ("open", "stick", "slip")
+
+
+def pair_key(a, b, n_blocks: int):
+    """One integer per unordered block pair: ``min(a, b) n_blocks + max(a, b)``.
+
+    Sorting by it groups a pair's contacts; the joint table and the results look pairs up
+    by it.
+    """
+    return np.minimum(a, b) * n_blocks + np.maximum(a, b)
 
 
 @dataclass
@@ -62,6 +71,35 @@ class ContactSet:
         )
 
 
+def _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom):
+    """A closed contact whose vertex is now found on the adjacent edge of the same block
+    moves there: its source row goes into ``src`` and its shear reference into ``xi0`` (in
+    place), placed so that g_s is the same on the new edge as on the old."""
+    closed_old = np.flatnonzero(old.state != OPEN)
+    miss = np.flatnonzero(~hit)
+    if not (len(closed_old) and len(miss)):
+        return
+    key2 = old.vertex[closed_old] * n_blocks + old.bk[closed_old]
+    o2 = np.argsort(key2)
+    want = new.vertex[miss] * n_blocks + new.bk[miss]
+    p2 = np.clip(np.searchsorted(key2[o2], want), 0, len(o2) - 1)
+    found = key2[o2][p2] == want
+    cand = closed_old[o2[p2]]
+    adjacent = (nxt[old.edge[cand]] == new.edge[miss]) | (prv[old.edge[cand]] == new.edge[miss])
+    # the old pair must be gone from the new detection
+    taken = np.zeros(len(old), dtype=bool)
+    taken[src[src >= 0]] = True
+    ok = found & adjacent & ~taken[cand]
+    moved = miss[ok]
+    from_old = cand[ok]
+    if len(moved):
+        og = contact_geometry(x, old.vertex[from_old], old.edge[from_old], nxt)
+        g_s = og.shear_gap(old.xi0[from_old])
+        src[moved] = from_old
+        # keep g_s: xi0 on the new edge is the foot minus the old shear gap
+        xi0[moved] = geom.xi[moved] - g_s / geom.length[moved]
+
+
 def carry_over(
     old: ContactSet, new: CandidateContacts, x: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
     n_blocks: int,
@@ -92,32 +130,7 @@ def carry_over(
         pos = np.clip(np.searchsorted(old_key[order], new_key), 0, len(old) - 1)
         hit = old_key[order][pos] == new_key
         src[hit] = order[pos[hit]]
-        # transfer to an adjacent edge of the same block
-        closed_old = np.flatnonzero(old.state != OPEN)
-        miss = np.flatnonzero(~hit)
-        if len(closed_old) and len(miss):
-            key2 = old.vertex[closed_old] * n_blocks + old.bk[closed_old]
-            o2 = np.argsort(key2)
-            want = new.vertex[miss] * n_blocks + new.bk[miss]
-            p2 = np.clip(np.searchsorted(key2[o2], want), 0, len(o2) - 1)
-            found = key2[o2][p2] == want
-            cand = closed_old[o2[p2]]
-            adjacent = (nxt[old.edge[cand]] == new.edge[miss]) | (
-                prv[old.edge[cand]] == new.edge[miss]
-            )
-            # the old pair must be gone from the new detection
-            taken = np.zeros(len(old), dtype=bool)
-            taken[src[src >= 0]] = True
-            ok = found & adjacent & ~taken[cand]
-            moved = miss[ok]
-            from_old = cand[ok]
-            if len(moved):
-                og = contact_geometry(x, old.vertex[from_old], old.edge[from_old], nxt)
-                g_s = og.shear_gap(old.xi0[from_old])
-                src[moved] = from_old
-                # keep g_s: xi0 on the new edge is the foot minus the old shear gap
-                shift = geom.xi[moved] - g_s / geom.length[moved]
-                xi0[moved] = shift
+        _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom)
         carried = src >= 0
         state[carried] = old.state[src[carried]]
         t_n[carried] = old.t_n[src[carried]]

@@ -229,8 +229,46 @@ def narrow_phase(
     if len(vertex) == 0:
         return empty
     vertex, edge = _expand_to_edges(vertex, kblock, topo.offsets)
-
     frame = contact_geometry(x, vertex, edge, topo.nxt)
+    ok, sunk = _within_reach(x, topo, vertex, edge, frame, search_distance, penetration_limit,
+                             sunk_depth)
+    c = _Candidates(vertex[ok], edge[ok], frame.xi[ok], topo.block[edge[ok]],
+                    -np.einsum("ij,ij->i", frame.normal[ok], bisector[vertex[ok]]),
+                    frame.p1[ok], ((frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL))[ok],
+                    sunk[ok])
+    if len(c.vertex) == 0:
+        return empty
+    c = _one_edge_per_block(c, x, topo, frame.gap[ok], frame.length[ok])
+    vertex, edge, kblock = _drop_mirrored(c, x, topo, max(search_distance, penetration_limit))
+    return CandidateContacts(
+        vertex=vertex, edge=edge, bj=topo.block[vertex], bk=kblock, pairs=len(pairs)
+    )
+
+
+@dataclass
+class _Candidates:
+    """Vertex-edge candidates on their way through :func:`narrow_phase`: vertex, edge, foot
+    parameter xi, the edge's block, the score (how well the edge opposes the vertex), the
+    vertex's position, foot on the edge, sunk."""
+
+    vertex: np.ndarray
+    edge: np.ndarray
+    xi: np.ndarray
+    kblock: np.ndarray
+    score: np.ndarray
+    p1: np.ndarray
+    on_edge: np.ndarray
+    sunk: np.ndarray
+
+    def take(self, index) -> _Candidates:
+        return _Candidates(*(a[index] for a in (self.vertex, self.edge, self.xi, self.kblock,
+                                                self.score, self.p1, self.on_edge, self.sunk)))
+
+
+def _within_reach(x, topo, vertex, edge, frame, search_distance, penetration_limit,
+                  sunk_depth):
+    """Which vertex-edge pairs may be contacts (gap, inside test, end reach, entrance), and
+    which vertices are sunk (the rules of :func:`narrow_phase`)."""
     p1, p2, p3 = frame.p1, frame.p2, frame.p3
     normal, gap, xi = frame.normal, frame.gap, frame.xi
     on_edge = (xi >= -_XI_TOL) & (xi <= 1.0 + _XI_TOL)
@@ -238,34 +276,7 @@ def narrow_phase(
     end = np.where((xi < 0.5)[:, None], p2, p3)
     end_distance = np.hypot(*(p1 - end).T)
     ok = (gap <= search_distance) & (gap >= -penetration_limit)
-    # a vertex behind an edge's line is in contact with it only when it is inside the
-    # block: beyond a thin block's far side it is behind the near edge's line too (gaps
-    # within round-off of zero are left alone: touching is neither inside nor out)
-    behind = np.flatnonzero(ok & (gap < -_GAP_TIE * frame.length))
-    sunk = np.zeros(len(ok), dtype=bool)
-    reach = np.full(len(ok), search_distance)
-    if len(behind):
-        # once per (vertex, block), not per edge
-        nb = len(topo.offsets)
-        key, first, back = np.unique(vertex[behind] * nb + topo.block[edge[behind]],
-                                     return_index=True, return_inverse=True)
-        inside, depth, _ = inside_depth(p1[behind[first]], key % nb, x, topo.offsets,
-                                        topo.nxt)
-        inside, depth = inside[back], depth[back]
-        # on the boundary (within round-off of an edge) is neither in nor out: a corner of a
-        # block sitting on an equal-width one lies on the lower block's side line
-        on_boundary = depth <= _GAP_TIE * frame.length[behind]
-        ok[behind[~inside & ~on_boundary]] = False
-        # nor deeper behind that line than the vertex is inside the block, give or take
-        # sunk_depth: a corner that has just entered a box through its top face is 3.8 cm
-        # behind the line of the box's side face, and a spring there throws the box off
-        too_deep = -gap[behind] > depth + sunk_depth
-        ok[behind[too_deep]] = False
-        deep = inside & (depth > sunk_depth)
-        sunk[behind[deep]] = True
-        # a vertex sunk into a block's reflex corner is nearest to the corner itself, past
-        # the end of both its edges: it reaches them as far as it is deep
-        reach[behind[deep]] += depth[deep]
+    sunk, reach = _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth)
     # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
     near_end = end_distance <= reach
     ok &= on_edge | near_end
@@ -279,60 +290,94 @@ def narrow_phase(
         arm = x[nb] - p1
         arm_len = np.hypot(arm[:, 0], arm[:, 1])
         ok &= sunk | (np.einsum("ij,ij->i", arm, normal) >= -sin_tol * arm_len)
-    vertex, edge, xi, normal, p1 = vertex[ok], edge[ok], xi[ok], normal[ok], p1[ok]
-    on_edge, gap, length, sunk = on_edge[ok], gap[ok], frame.length[ok], sunk[ok]
-    if len(vertex) == 0:
-        return empty
-    kblock = topo.block[edge]
-    score = -np.einsum("ij,ij->i", normal, bisector[vertex])
+    return ok, sunk
 
-    # one edge per (vertex, block): the one the vertex is least deep behind (the signed
-    # distance to a convex block is the largest of the gaps to its edges' lines), then one
-    # whose foot is on it, then the best opposed
-    group = np.unique(vertex * len(topo.offsets) + kblock, return_inverse=True)[1]
+
+def _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth):
+    """The inside test of vertices behind an edge's line (``ok`` is updated in place).
+
+    Returns the sunk flags and how far past an edge's end each pair still reaches.
+    """
+    gap = frame.gap
+    # a vertex behind an edge's line is in contact with it only when it is inside the
+    # block: beyond a thin block's far side it is behind the near edge's line too (gaps
+    # within round-off of zero are left alone: touching is neither inside nor out)
+    behind = np.flatnonzero(ok & (gap < -_GAP_TIE * frame.length))
+    sunk = np.zeros(len(ok), dtype=bool)
+    reach = np.full(len(ok), search_distance)
+    if len(behind) == 0:
+        return sunk, reach
+    # once per (vertex, block), not per edge
+    nb = len(topo.offsets)
+    key, first, back = np.unique(vertex[behind] * nb + topo.block[edge[behind]],
+                                 return_index=True, return_inverse=True)
+    inside, depth, _ = inside_depth(frame.p1[behind[first]], key % nb, x, topo.offsets,
+                                    topo.nxt)
+    inside, depth = inside[back], depth[back]
+    # on the boundary (within round-off of an edge) is neither in nor out: a corner of a
+    # block sitting on an equal-width one lies on the lower block's side line
+    on_boundary = depth <= _GAP_TIE * frame.length[behind]
+    ok[behind[~inside & ~on_boundary]] = False
+    # nor deeper behind that line than the vertex is inside the block, give or take
+    # sunk_depth: a corner that has just entered a box through its top face is 3.8 cm
+    # behind the line of the box's side face, and a spring there throws the box off
+    too_deep = -gap[behind] > depth + sunk_depth
+    ok[behind[too_deep]] = False
+    deep = inside & (depth > sunk_depth)
+    sunk[behind[deep]] = True
+    # a vertex sunk into a block's reflex corner is nearest to the corner itself, past
+    # the end of both its edges: it reaches them as far as it is deep
+    reach[behind[deep]] += depth[deep]
+    return sunk, reach
+
+
+def _one_edge_per_block(c: _Candidates, x, topo, gap, length) -> _Candidates:
+    """One edge per (vertex, block): the one the vertex is least deep behind (the signed
+    distance to a convex block is the largest of the gaps to its edges' lines), then one
+    whose foot is on it, then the best opposed; and across a reflex corner the other edge."""
+    group = np.unique(c.vertex * len(topo.offsets) + c.kblock, return_inverse=True)[1]
     best = np.full(group.max() + 1, -np.inf)
     np.maximum.at(best, group, gap)
     least_deep = gap >= best[group] - _GAP_TIE * length
-    order = np.lexsort((-score, ~on_edge, ~least_deep, kblock, vertex))
-    vertex, edge, xi, kblock, score, p1, on_edge, sunk = (
-        a[order] for a in (vertex, edge, xi, kblock, score, p1, on_edge, sunk)
-    )
-    first = np.ones(len(vertex), dtype=bool)
-    first[1:] = (vertex[1:] != vertex[:-1]) | (kblock[1:] != kblock[:-1])
+    c = c.take(np.lexsort((-c.score, ~c.on_edge, ~least_deep, c.kblock, c.vertex)))
+    first = np.ones(len(c.vertex), dtype=bool)
+    first[1:] = (c.vertex[1:] != c.vertex[:-1]) | (c.kblock[1:] != c.kblock[:-1])
     # at a reflex vertex of block k the solid is the union of its two edges' half-planes, so
     # a vertex near that corner is near both edges at once: keep the edge across the corner
     # from the chosen one too (a block sliding into a notch would otherwise lose its seat on
     # the face as soon as the notch's wall becomes the least deep edge)
-    chosen = edge[first][np.cumsum(first) - 1]
+    chosen = c.edge[first][np.cumsum(first) - 1]
     reflex = topo.reflex(x)
-    keep = first | ((edge == topo.nxt[chosen]) & reflex[topo.nxt[chosen]]) | (
-        (edge == topo.prv[chosen]) & reflex[chosen])
-    vertex, edge, xi, kblock, score, p1, on_edge, sunk = (
-        a[keep] for a in (vertex, edge, xi, kblock, score, p1, on_edge, sunk)
-    )
+    keep = first | ((c.edge == topo.nxt[chosen]) & reflex[topo.nxt[chosen]]) | (
+        (c.edge == topo.prv[chosen]) & reflex[chosen])
+    return c.take(keep)
 
-    # vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)
-    near_end = np.where(xi < 0.5, topo.nxt[edge], edge)
-    dist = np.linalg.norm(p1 - x[near_end], axis=1)
-    vv = dist <= max(search_distance, penetration_limit)
-    if vv.any():
-        idx = np.flatnonzero(vv)
-        a = np.minimum(vertex[idx], near_end[idx])
-        b = np.maximum(vertex[idx], near_end[idx])
-        order = np.lexsort((vertex[idx], -score[idx], ~on_edge[idx], b, a))
-        a, b, idx = a[order], b[order], idx[order]
-        head = np.ones(len(idx), dtype=bool)
-        head[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1])
-        kept_vertex = vertex[idx][head][np.cumsum(head) - 1]
-        # only the mirror image goes: the same vertex in a reflex corner keeps both edges
-        dup = ~head & (vertex[idx] != kept_vertex)
-        dup &= ~sunk[idx]  # a sunk vertex keeps its own spring
-        drop = np.zeros(len(vertex), dtype=bool)
-        drop[idx[dup]] = True
-        vertex, edge, kblock = vertex[~drop], edge[~drop], kblock[~drop]
-    return CandidateContacts(
-        vertex=vertex, edge=edge, bj=topo.block[vertex], bk=kblock, pairs=len(pairs)
-    )
+
+def _drop_mirrored(c: _Candidates, x, topo, reach):
+    """Vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P).
+
+    Returns the kept vertices, edges and edge blocks.
+    """
+    vertex, edge, kblock = c.vertex, c.edge, c.kblock
+    near_end = np.where(c.xi < 0.5, topo.nxt[edge], edge)
+    dist = np.linalg.norm(c.p1 - x[near_end], axis=1)
+    vv = dist <= reach
+    if not vv.any():
+        return vertex, edge, kblock
+    idx = np.flatnonzero(vv)
+    a = np.minimum(vertex[idx], near_end[idx])
+    b = np.maximum(vertex[idx], near_end[idx])
+    order = np.lexsort((vertex[idx], -c.score[idx], ~c.on_edge[idx], b, a))
+    a, b, idx = a[order], b[order], idx[order]
+    head = np.ones(len(idx), dtype=bool)
+    head[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1])
+    kept_vertex = vertex[idx][head][np.cumsum(head) - 1]
+    # only the mirror image goes: the same vertex in a reflex corner keeps both edges
+    dup = ~head & (vertex[idx] != kept_vertex)
+    dup &= ~c.sunk[idx]  # a sunk vertex keeps its own spring
+    drop = np.zeros(len(vertex), dtype=bool)
+    drop[idx[dup]] = True
+    return vertex[~drop], edge[~drop], kblock[~drop]
 
 
 def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.ndarray,

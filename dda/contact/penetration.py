@@ -30,7 +30,8 @@ from dda.contact.detection import (
     inside_depth,
 )
 
-__all__ = ["Penetrations", "vertex_penetrations", "untracked_depth", "untracked_penetrations"]
+__all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
+           "untracked_depth", "untracked_penetrations"]
 
 
 @dataclass
@@ -160,3 +161,51 @@ def untracked_penetrations(pen: Penetrations, contacts, normal_penalty: np.ndarr
     """Which of ``pen`` no closed contact accounts for (boolean mask over ``pen``): those
     deeper than their spring (:func:`untracked_depth`) by more than ``tolerance``."""
     return untracked_depth(pen, contacts, normal_penalty, topo) > tolerance
+
+
+@dataclass(frozen=True)
+class GuardReport:
+    """What the penetration guard found on a step's trial.
+
+    ``reason`` is empty when every vertex inside another block is held by a closed contact
+    at its depth (give or take the tolerance), else why the step is refused. ``deepest`` is
+    the deepest vertex inside another block (m), ``spring_deepest`` the deepest closed spring
+    (m), ``untracked`` the deepest untracked penetration in tolerances.
+    """
+
+    reason: str = ""
+    deepest: float = 0.0
+    spring_deepest: float = 0.0
+    untracked: float = 0.0
+
+
+def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
+                      tolerance: float) -> GuardReport:
+    """The penetration guard on a trial configuration ``x_new`` of ``model``'s blocks.
+
+    ``contacts`` are the trial's contacts, ``normal_penalty`` their p_n, ``pairs`` the block
+    pairs whose boxes may overlap; ``tolerance`` is a fraction of the thinner block's
+    half-width (:attr:`dda.model.Model.thickness`).
+    """
+    if model.n_blocks < 2:
+        return GuardReport()
+    pen = vertex_penetrations(x_new, model.topo, pairs=pairs)
+    closed = contacts.state != OPEN
+    spring = float(np.max(-contacts.t_n[closed] / normal_penalty[closed], initial=0.0))
+    if len(pen) == 0:
+        return GuardReport("", pen.deepest, spring)
+    tol = tolerance * np.minimum(model.thickness[model.topo.block[pen.vertex]],
+                                 model.thickness[pen.block])
+    ratio = untracked_depth(pen, contacts, normal_penalty, model.topo) / tol
+    untracked = float(np.max(ratio))
+    if not (ratio > 1.0).any():
+        return GuardReport("", pen.deepest, spring, untracked)
+    i = int(np.argmax(ratio))
+    v = int(pen.vertex[i])
+    j = int(model.topo.block[v])
+    local = v - int(model.offsets[j])
+    reason = (f"untracked penetration: vertex {local} of {model.block_label(j)} "
+              f"(at {x_new[v, 0]:.6g}, {x_new[v, 1]:.6g}) is {pen.depth[i]:.3g} m inside "
+              f"{model.block_label(pen.block[i])}, and no closed contact holds it "
+              f"(tolerance {tol[i]:.3g} m)")
+    return GuardReport(reason, pen.deepest, spring, untracked)

@@ -76,45 +76,19 @@ class OpenCloseResult:
 def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
     """Run the OPEN-CLOSE iteration of one step (see the module docstring)."""
     el = problem.element
-    c = el.contacts
-    m = len(el)
-    if m == 0:  # no contacts: one linear solve settles the step
-        try:
-            d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
-                                   el.bk, np.zeros((0, 12, 12)), np.zeros((0, 12)),
-                                   problem.d_known, problem.pattern)
-        except SingularSystemError as exc:
-            return OpenCloseResult(False, 1, f"singular system: {exc}")
-        z = np.zeros(0)
-        return OpenCloseResult(True, 1, "", d, np.zeros(0, dtype=np.int8), z, z,
-                               {k: v.copy() for k, v in c.history.items()})
-    pn = el.normal_penalty
-    closed0 = c.state != OPEN
-    zero = np.zeros(m)
-    # pull-back: last step's shear force above the strength is cut back to it here
-    _, over, history = el.friction(c.history, zero, c.t_n, where=closed0)
-    # the stick springs' force at the step's start, from the pulled-back history (every
-    # contact: one that closes during the step starts from its law's initial history)
-    t_stick, _ = el.stick(history, zero, where=np.ones(m, dtype=bool))
-    state = c.state.copy()
-    state[closed0 & over] = SLIP
-    # legacy's explicit rule spares only the contacts that start the step sticking
-    spared = (state == STICK) if explicit else np.zeros(m, dtype=bool)
-    # a contact that starts the step touching or penetrating is first tried closed: started
-    # open, a stack of n touching blocks would need n passes to close from the bottom up
+    if len(el) == 0:  # no contacts: one linear solve settles the step
+        return _without_contacts(problem)
+    history, t_stick, state, held = _start(el, explicit)
     gap_tol = round_off_gap(el)
-    state[(state == OPEN) & (el.gap0 <= gap_tol)] = STICK
-    t_n_lag = c.t_n.copy()
-    dgs_prev = zero
+    t_n_lag = el.contacts.t_n.copy()
+    dgs_prev = np.zeros(len(el))
     passes = 0
-    d = gap = dgs = None
     seen = {state.tobytes()}
     for passes in range(1, problem.max_open_close + 1):
-        slip = state == SLIP
         # evaluated on every closed contact (used on the sliding ones): a law that judges
         # faces needs a face's sticking contacts too
         t_slip, _, _ = el.friction(history, dgs_prev, t_n_lag, where=state != OPEN)
-        t_slip = np.where(slip, t_slip, 0.0)
+        t_slip = np.where(state == SLIP, t_slip, 0.0)
         k, f = el.legacy_contributions(state, t_stick, t_slip)
         try:
             d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
@@ -122,21 +96,7 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         except SingularSystemError as exc:
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         gap, dgs = el.linear_gaps(d)
-        # within round-off of zero a contact keeps its state (open, stick or slip): the gap
-        # of two blocks that move alike (a row of bricks) is zero up to noise, and so are its
-        # normal force and strength, whose signs would flip the state every pass
-        noise = np.abs(gap) <= gap_tol
-        closed = (gap < -gap_tol) | (noise & (state != OPEN))
-        t_n = np.where(closed, np.minimum(pn * gap, 0.0), 0.0)
-        # a closing contact starts sticking (the return map below may make it slip); one that
-        # legacy spares the friction check must not stay open when it closes again after a
-        # pass opened it (a slab bounced into its floor by a brick stayed open 1.4 mm deep)
-        new_state = np.where(closed, np.where(state == OPEN, STICK, state), OPEN).astype(np.int8)
-        check = closed & ~(spared & closed0) & ~noise
-        t_trial, slipping, _ = el.friction(history, dgs, t_n, where=check)
-        # a slip that reverses against the friction load of this pass sticks
-        reversed_ = (state == SLIP) & (np.sign(t_trial) != np.sign(t_slip))
-        new_state[check] = np.where(slipping[check] & ~reversed_[check], SLIP, STICK)
+        new_state, t_n = _next_states(el, state, history, gap, dgs, t_slip, held, gap_tol)
         # a sliding contact's friction came from the last pass's normal force: the pass
         # only counts when that force is the one this pass ended with
         # (forces below NORMAL_FORCE_FLOOR of the step's largest matter to no block: a
@@ -151,6 +111,61 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         seen.add(new_state.tobytes())
         state, t_n_lag, dgs_prev = new_state, t_n, dgs
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
+
+
+def _without_contacts(problem) -> OpenCloseResult:
+    el = problem.element
+    try:
+        d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj, el.bk,
+                               np.zeros((0, 12, 12)), np.zeros((0, 12)), problem.d_known,
+                               problem.pattern)
+    except SingularSystemError as exc:
+        return OpenCloseResult(False, 1, f"singular system: {exc}")
+    z = np.zeros(0)
+    return OpenCloseResult(True, 1, "", d, np.zeros(0, dtype=np.int8), z, z,
+                           {k: v.copy() for k, v in el.contacts.history.items()})
+
+
+def _start(el, explicit):
+    """The step's start: the pulled-back history, the stick springs' forces, the first
+    states, and the contacts spared the friction check (legacy's explicit rule)."""
+    c = el.contacts
+    m = len(el)
+    closed0 = c.state != OPEN
+    zero = np.zeros(m)
+    # pull-back: last step's shear force above the strength is cut back to it here
+    _, over, history = el.friction(c.history, zero, c.t_n, where=closed0)
+    # the stick springs' force at the step's start, from the pulled-back history (every
+    # contact: one that closes during the step starts from its law's initial history)
+    t_stick, _ = el.stick(history, zero, where=np.ones(m, dtype=bool))
+    state = c.state.copy()
+    state[closed0 & over] = SLIP
+    # legacy's explicit rule spares only the contacts that start the step sticking
+    spared = (state == STICK) if explicit else np.zeros(m, dtype=bool)
+    # a contact that starts the step touching or penetrating is first tried closed: started
+    # open, a stack of n touching blocks would need n passes to close from the bottom up
+    state[(state == OPEN) & (el.gap0 <= round_off_gap(el))] = STICK
+    return history, t_stick, state, spared & closed0
+
+
+def _next_states(el, state, history, gap, dgs, t_slip, held, gap_tol):
+    """The contact states a pass's solution asks for, and its normal forces."""
+    # within round-off of zero a contact keeps its state (open, stick or slip): the gap
+    # of two blocks that move alike (a row of bricks) is zero up to noise, and so are its
+    # normal force and strength, whose signs would flip the state every pass
+    noise = np.abs(gap) <= gap_tol
+    closed = (gap < -gap_tol) | (noise & (state != OPEN))
+    t_n = np.where(closed, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
+    # a closing contact starts sticking (the return map below may make it slip); one that
+    # legacy spares the friction check must not stay open when it closes again after a
+    # pass opened it (a slab bounced into its floor by a brick stayed open 1.4 mm deep)
+    new_state = np.where(closed, np.where(state == OPEN, STICK, state), OPEN).astype(np.int8)
+    check = closed & ~held & ~noise
+    t_trial, slipping, _ = el.friction(history, dgs, t_n, where=check)
+    # a slip that reverses against the friction load of this pass sticks
+    reversed_ = (state == SLIP) & (np.sign(t_trial) != np.sign(t_slip))
+    new_state[check] = np.where(slipping[check] & ~reversed_[check], SLIP, STICK)
+    return new_state, t_n
 
 
 def round_off_gap(element) -> np.ndarray:

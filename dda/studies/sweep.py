@@ -132,7 +132,7 @@ def run_case(case: Case) -> dict:
         result = sim.run(duration, progress=False)
     except SimulationError as exc:
         result = exc.result
-        status = f"failed at t = {sim.state.time:.4g} s: {exc}"
+        status = f"failed at t = {sim.committed.time:.4g} s: {exc}"
     cpu = clock() - cpu0
     wall = time.perf_counter() - wall0
     measures = error(result) if status == "ok" else {"error": math.nan}

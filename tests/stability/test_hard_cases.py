@@ -88,8 +88,8 @@ def test_a_shaken_cut_slope_gains_no_energy_beyond_the_work_of_the_shaking(solve
     # the work counter is right: the rock mass rides with the table, whose speed after half a
     # period of shaking from rest is 2 x 0.3 g / (4 pi); the contact work of the base and the
     # wall (work.done, without their own kinetic energy) is about the mass's kinetic energy
-    free = sim.free
-    mass = float(np.sum(sim.density[free] * scene_areas(sim)[free]))
+    free = sim.model.free
+    mass = float(np.sum(sim.model.density[free] * scene_areas(sim)[free]))
     v_table = 2 * 0.3 * 9.81 / (4 * np.pi)
     assert work.done == pytest.approx(0.5 * mass * v_table**2, rel=0.05)
     # the check: at no step above the start plus the work put in, by 1 % of that work (the
@@ -103,7 +103,7 @@ def test_a_shaken_cut_slope_gains_no_energy_beyond_the_work_of_the_shaking(solve
 def scene_areas(sim):
     from dda import geometry
 
-    return geometry.polygon_integrals(sim.state.x, sim.offsets).area
+    return geometry.polygon_integrals(sim.state.x, sim.model.offsets).area
 
 
 def test_the_watch_sees_an_energy_gain_and_a_deep_penetration():

@@ -9,6 +9,8 @@ import numpy as np
 from dda import geometry
 from dda.contact.detection import bounding_boxes, broad_phase
 from dda.contact.penetration import untracked_depth, vertex_penetrations
+from dda.recorder import pair_forces
+from dda.step import deepest_spring
 
 
 @dataclass
@@ -36,9 +38,9 @@ class Watched:
 def smallest_dimension(sim) -> float:
     """Smallest width of any block: over its edges, the largest distance of a vertex from the
     edge's line, and the least of those (convex blocks)."""
-    x, offsets = sim.state.x, sim.offsets
+    x, offsets = sim.state.x, sim.model.offsets
     widths = []
-    for b in range(sim.n_blocks):  # once per run, not per step
+    for b in range(sim.model.n_blocks):  # once per run, not per step
         p = x[offsets[b]:offsets[b + 1]]
         e = np.roll(p, -1, axis=0) - p
         n = np.stack([-e[:, 1], e[:, 0]], axis=1) / np.linalg.norm(e, axis=1)[:, None]
@@ -51,28 +53,29 @@ def untracked(sim) -> float:
     """How much deeper than the closed springs that hold it the deepest vertex inside another
     block is (m). The vertices inside are found geometrically (contact detection is not
     asked): of a free block inside another block, or of any block inside a free one."""
-    x, offsets = sim.state.x, sim.offsets
+    x, offsets = sim.state.x, sim.model.offsets
     pairs = broad_phase(bounding_boxes(x, offsets), 0.0)
-    pairs = pairs[sim.free[pairs[:, 0]] | sim.free[pairs[:, 1]]]
-    pen = vertex_penetrations(x, sim.topo, pairs=pairs)
+    pairs = pairs[sim.model.free[pairs[:, 0]] | sim.model.free[pairs[:, 1]]]
+    pen = vertex_penetrations(x, sim.model.topo, pairs=pairs)
     c = sim.state.contacts
-    pn = sim.joint_pn[sim._joint_index(c.bj, c.bk)] if len(c) else np.zeros(0)
-    return float(np.max(untracked_depth(pen, c, pn, sim.topo), initial=0.0))
+    model = sim.model
+    pn = model.joints.normal_penalty[model.joint_index(c.bj, c.bk)] if len(c) else np.zeros(0)
+    return float(np.max(untracked_depth(pen, c, pn, sim.model.topo), initial=0.0))
 
 
 def guard_tolerance(sim) -> float:
     """1 % of the thinnest block's half-width 2 area / perimeter (the guard's default)."""
-    return 0.01 * float(np.min(sim.thickness))
+    return 0.01 * float(np.min(sim.model.thickness))
 
 
 def energy_scale(sim) -> float:
     """The energy a scene can set free: its kinetic energy plus the potential energy of every
     block above the scene's lowest point."""
     e = sim.energy()
-    ints = geometry.polygon_integrals(sim.state.x, sim.offsets)
+    ints = geometry.polygon_integrals(sim.state.x, sim.model.offsets)
     g = sim.scene.gravity or 0.0
     drop = ints.centroid[:, 1] - sim.state.x[:, 1].min()
-    return e.kinetic + float(np.sum(g * sim.density * ints.area * drop * sim.free))
+    return e.kinetic + float(np.sum(g * sim.model.density * ints.area * drop * sim.model.free))
 
 
 def watch(sim, duration: float, work=None, chunk: int = 1) -> Watched:
@@ -101,7 +104,7 @@ def watch(sim, duration: float, work=None, chunk: int = 1) -> Watched:
         assert np.all(np.isfinite(st.contacts.t_n)) and np.all(np.isfinite(st.contacts.t_s))
         done = work(sim) if work is not None else 0.0
         peak = max(peak, sim.energy().total - done)
-        pen = max(pen, sim._deepest_penetration())
+        pen = max(pen, deepest_spring(sim.model, sim.committed.contacts))
         excess = max(excess, untracked(sim))
     return Watched(steps, e0, peak, scale, done, pen, smallest, cuts, sim, excess,
                    guard_tolerance(sim))
@@ -138,7 +141,7 @@ class KnownMotionWork:
     """
 
     def __init__(self, sim):
-        self.known = ~sim.free
+        self.known = ~sim.model.free
         self.done = 0.0
         self.force = self._force(sim)
         self.u = sim.state.known_u.copy()
@@ -146,8 +149,9 @@ class KnownMotionWork:
 
     def _force(self, sim):
         """(n_blocks, 2) force each known block exerts on the free blocks it touches."""
-        keys, f, _ = sim._pair_forces()  # f: force on the higher-index block of each pair
-        nb = sim.n_blocks
+        # f: force on the higher-index block of each pair
+        keys, f, _ = pair_forces(sim.model, sim.committed)
+        nb = sim.model.n_blocks
         lo, hi = keys // nb, keys % nb
         out = np.zeros((nb, 2))
         m = self.known[lo] & ~self.known[hi]
@@ -158,12 +162,13 @@ class KnownMotionWork:
 
     def _own_energy(self, sim):
         st = sim.state
-        ints = geometry.polygon_integrals(st.x, sim.offsets)
-        mass = geometry.mass_matrices(ints, sim.density)
+        ints = geometry.polygon_integrals(st.x, sim.model.offsets)
+        mass = geometry.mass_matrices(ints, sim.model.density)
         v = np.where(self.known[:, None], st.velocity, 0.0)
         g = sim.scene.gravity or 0.0
         return (0.5 * float(np.einsum("bi,bij,bj->", v, mass, v))
-                + float(np.sum(self.known * g * sim.density * ints.area * ints.centroid[:, 1])))
+                + float(np.sum(self.known * g * sim.model.density * ints.area
+                               * ints.centroid[:, 1])))
 
     def __call__(self, sim) -> float:
         force, u = self._force(sim), sim.state.known_u.copy()

@@ -1,0 +1,255 @@
+"""Model: a scene compiled into arrays, built once and never changed by a run.
+
+The blocks' geometry and materials, which blocks carry unknowns, the joint and friction-law
+tables with the pair index, the loads and constraint springs as arrays, and the block forces
+of a step (METHOD.md sections 1 and 2). :func:`dda.step.step` reads it; so do the energy, the
+CLI, the pictures and anyone who wants to look inside a run (``Simulation.model``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dda import geometry
+from dda.contact.contacts import ContactSet, pair_key
+from dda.contact.detection import VertexTopology
+from dda.contact.friction import FrictionLaw
+from dda.scene import Scene
+
+__all__ = ["JointTable", "Model"]
+
+
+@dataclass(frozen=True)
+class JointTable:
+    """The scene's joints as arrays: one row per distinct joint, a default and per-pair rows.
+
+    Attributes
+    ----------
+    default : row of the default joint, -1 when the scene has none
+    pair_keys, pair_joint : sorted :func:`dda.contact.contacts.pair_key` of the pairs that
+        have their own joint, and that joint's row
+    normal_penalty, shear_penalty : (n_joints,) p_n and p_s
+    law : (n_joints,) row of each joint's friction law in ``laws``
+    laws : the distinct friction laws
+    history_fields : every law's history fields and their initial values
+    """
+
+    default: int
+    pair_keys: np.ndarray
+    pair_joint: np.ndarray
+    normal_penalty: np.ndarray
+    shear_penalty: np.ndarray
+    law: np.ndarray
+    laws: tuple[FrictionLaw, ...]
+    history_fields: dict
+
+    @classmethod
+    def from_scene(cls, scene: Scene, n_blocks: int) -> JointTable:
+        joints, index_of = [], {}
+
+        def row(j):
+            if id(j) not in index_of:
+                index_of[id(j)] = len(joints)
+                joints.append(j)
+            return index_of[id(j)]
+
+        default = row(scene.default_joint) if scene.default_joint is not None else -1
+        pairs = scene.pair_joints
+        keys = np.array([pair_key(a, b, n_blocks) for (a, b) in pairs], dtype=np.int64)
+        ids = np.array([row(j) for j in pairs.values()], dtype=np.int64)
+        order = np.argsort(keys)
+        laws, law_of = [], {}
+        for j in joints:
+            if id(j.friction) not in law_of:
+                law_of[id(j.friction)] = len(laws)
+                laws.append(j.friction)
+        fields = {}
+        for law in laws:
+            fields.update(law.history_fields())
+        return cls(default, keys[order], ids[order],
+                   np.array([j.normal_penalty for j in joints], dtype=float),
+                   np.array([j.shear_penalty for j in joints], dtype=float),
+                   np.array([law_of[id(j.friction)] for j in joints], dtype=np.int64),
+                   tuple(laws), fields)
+
+    def index(self, keys: np.ndarray) -> np.ndarray:
+        """Row of the joint of each block pair (given by its pair key); -1 where none."""
+        out = np.full(len(keys), self.default, dtype=np.int64)
+        if len(self.pair_keys):
+            pos = np.clip(np.searchsorted(self.pair_keys, keys), 0, len(self.pair_keys) - 1)
+            hit = self.pair_keys[pos] == keys
+            out[hit] = self.pair_joint[pos[hit]]
+        return out
+
+
+class Model:
+    """A scene compiled into arrays (see the module docstring). Build it with ``Model(scene)``.
+
+    Attributes
+    ----------
+    scene : the Scene it was built from
+    n_blocks : number of blocks
+    offsets : (n_blocks + 1,) CSR offsets of the blocks' vertices
+    topo : :class:`dda.contact.detection.VertexTopology` of the vertices
+    x_initial, centroid_initial : vertices and block centroids at the start
+    size : (n_blocks,) square root of each block's area at the start (a length scale)
+    thickness : (n_blocks,) ``2 area / perimeter`` at the start: half a square's side
+    density, elasticity : (n_blocks,) and (n_blocks, 3, 3) material data
+    free : (n_blocks,) True for the blocks that carry unknowns (not fixed, shaken or moved)
+    rigid : (n_blocks,) bool of the blocks without strain unknowns, or None when none is
+    damping : per block (mass, stiffness) Rayleigh coefficients, or None
+    joints : :class:`JointTable`
+    shakes, full_motions, partial_motions : the scene's shaking and prescribed motions
+    load_initial, load_block, load_constant, load_varying : point loads as arrays
+    spring_initial, spring_block, spring_motion, spring_mask, spring_penalty : the penalty
+        springs of partial constraints, one per material point
+
+    Examples
+    --------
+    >>> import dda
+    >>> from dda.materials import LinearElastic
+    >>> scene = dda.Scene(gravity=9.81)
+    >>> _ = scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)],
+    ...                     LinearElastic(young=1e9, poisson=0.2, density=1000.0))
+    >>> model = Model(scene)
+    >>> model.n_blocks, model.free.tolist(), model.size.tolist()
+    (1, [True], [1.0])
+    """
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        blocks = scene.block_inputs
+        nb = len(blocks)
+        self.n_blocks = nb
+        x0, offsets = scene.vertex_arrays()
+        self.offsets = offsets
+        self.topo = VertexTopology.from_offsets(offsets)
+        self.x_initial = x0.copy()
+        ints = geometry.polygon_integrals(x0, offsets)
+        self.centroid_initial = ints.centroid.copy()
+        self.size = np.sqrt(ints.area)
+        edges = x0[self.topo.nxt] - x0
+        perimeter = np.add.reduceat(np.hypot(edges[:, 0], edges[:, 1]), offsets[:-1])
+        self.thickness = 2.0 * ints.area / perimeter
+        self.density = np.array([b.material.density for b in blocks])
+        self.elasticity = np.stack([b.material.elasticity() for b in blocks])
+        young = np.array([b.material.young for b in blocks])
+        self.gravity = scene.gravity
+
+        # blocks whose motion is known carry no unknowns; rigid ones carry no strain unknowns
+        self.free = np.array([not b.fixed for b in blocks])
+        rigid = np.array([b.rigid for b in blocks], dtype=bool)
+        self.rigid = rigid if rigid.any() else None
+        self.shakes = scene.shakes
+        self.full_motions = tuple(m for m in scene.motions if not m.springs)
+        self.partial_motions = tuple(m for m in scene.motions if m.springs)
+        for s in self.shakes:
+            self.free[s.block] = False
+        for m in self.full_motions:
+            self.free[m.block] = False
+        self.constraint_penalty = 100.0 * young.max()
+        self.damping = scene.damping_coefficients()
+        self.joints = JointTable.from_scene(scene, nb)
+        self._compile_loads(scene.point_loads)
+        self._compile_springs(x0)
+
+    def _compile_loads(self, loads):
+        self.load_initial = np.array([ld.point for ld in loads]).reshape(-1, 2)
+        self.load_block = np.array([ld.block for ld in loads], dtype=np.int64)
+        self.load_constant = np.array([ld.force(0.0) if ld.force.constant else (0.0, 0.0)
+                                       for ld in loads]).reshape(-1, 2)
+        self.load_varying = tuple((i, ld.force) for i, ld in enumerate(loads)
+                                  if not ld.force.constant)
+
+    def _compile_springs(self, x0):
+        # one penalty spring per point (default: every vertex) of each partially constrained
+        # block; the points are material points that move with the block
+        partial = self.partial_motions
+        points = [m.points if m.points is not None
+                  else x0[self.offsets[m.block]:self.offsets[m.block + 1]] for m in partial]
+        counts = np.array([len(p) for p in points], dtype=np.int64)
+        self.spring_initial = np.concatenate(points) if points else np.zeros((0, 2))
+        self.spring_block = np.repeat(np.array([m.block for m in partial], dtype=np.int64),
+                                      counts)
+        self.spring_motion = np.repeat(np.arange(len(partial)), counts)
+        self.spring_mask = np.array([m.displacement.mask for m in partial],
+                                    dtype=float).reshape(-1, 2)[self.spring_motion]
+        self.spring_penalty = np.array([m.penalty or self.constraint_penalty
+                                        for m in partial]).reshape(-1)[self.spring_motion]
+
+    # ------------------------------------------------------------------ lookups
+    def block_label(self, i: int) -> str:
+        """How messages name block ``i`` (its name, or its index)."""
+        return str(self.scene.blocks[int(i)])
+
+    def joint_index(self, bj: np.ndarray, bk: np.ndarray) -> np.ndarray:
+        """Row of :attr:`joints` of the joint between blocks bj and bk (-1 where none)."""
+        return self.joints.index(pair_key(bj, bk, self.n_blocks))
+
+    def initial_contacts(self) -> ContactSet:
+        """An empty contact set with every law's history fields."""
+        return ContactSet.empty(self.joints.history_fields)
+
+    def initial_velocity(self) -> np.ndarray:
+        """(n_blocks, 6) velocities at the start (zero for blocks whose motion is known)."""
+        vel = np.zeros((self.n_blocks, 6))
+        for i, b in enumerate(self.scene.block_inputs):
+            vel[i, :2] = b.velocity
+            vel[i, 2] = b.angular_velocity
+        vel[~self.free] = 0.0
+        return vel
+
+    # ------------------------------------------------------------------ per step
+    def known_motion(self, t1: float, known_u: np.ndarray, shaking: tuple):
+        """Known translation at ``t1`` and velocity of every block whose motion is given.
+
+        Returns ``(u, v, shaking)``: (n_blocks, 2) each, and the shaking integrators' states
+        at ``t1`` (``shaking`` holds them at the step's start; nothing here changes).
+        """
+        u = known_u.copy()
+        v = np.zeros((self.n_blocks, 2))
+        after = []
+        for s, start in zip(self.shakes, shaking, strict=True):
+            u[s.block], v[s.block], end = s.history.advance(start, t1)
+            after.append(end)
+        for m in self.full_motions:
+            u[m.block] = m.displacement(t1)
+        return u, v, tuple(after)
+
+    def block_forces(self, t1, ints, stress, load_points, spring_points):
+        """Block stiffness, mass, damping and external forces (METHOD.md sections 1 and 2).
+
+        ``ints`` are the polygon integrals of the blocks at the step's start, ``stress`` the
+        blocks' committed stresses, the points the current places of the loads' and springs'
+        material points. Returns (nb, 6, 6) k, m and c (None without damping) and (nb, 6) f.
+        """
+        k = geometry.stiffness_matrices(ints.area, self.elasticity)
+        m = geometry.mass_matrices(ints, self.density)
+        c = None
+        if self.damping is not None:  # C = alpha M + beta K_e, before any penalty spring
+            alpha, beta = self.damping
+            c = alpha[:, None, None] * m + beta[:, None, None] * k
+        f = np.zeros((self.n_blocks, 6))
+        if self.gravity:
+            f[:, 1] -= self.gravity * self.density * ints.area
+        f[:, 3:] -= ints.area[:, None] * stress
+        centroid = ints.centroid
+        if len(self.load_block):
+            forces = self.load_constant.copy()
+            for i, history in self.load_varying:  # one user callable per time-varying load
+                forces[i] = history(t1)
+            t = geometry.t_matrix(load_points, centroid[self.load_block])
+            np.add.at(f, self.load_block, np.einsum("lij,li->lj", t, forces))
+        if len(self.spring_block):
+            # penalty springs p T^T T on the constrained directions of each point (METHOD s. 1)
+            u = np.array([mo.displacement(t1) for mo in self.partial_motions])
+            u = u[self.spring_motion]
+            t = geometry.t_matrix(spring_points, centroid[self.spring_block])
+            t = t * self.spring_mask[:, :, None]
+            target = (self.spring_initial + u - spring_points) * self.spring_mask
+            p = self.spring_penalty
+            np.add.at(k, self.spring_block, p[:, None, None] * np.einsum("vij,vik->vjk", t, t))
+            np.add.at(f, self.spring_block, p[:, None] * np.einsum("vij,vi->vj", t, target))
+        return k, m, c, f

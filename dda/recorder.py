@@ -1,0 +1,112 @@
+"""Recording a run: the result's rows and the writer's frames, from committed states only.
+
+The numerics never record; :class:`dda.Simulation` hands each committed
+:class:`dda.step.StepState` to a :class:`Recorder`, which keeps every ``every``-th one (and
+the last) in the :class:`dda.result.Result` and passes it, as a :class:`dda.result.Frame`, to
+the writer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from dda import geometry
+from dda.contact.contacts import OPEN, pair_key
+from dda.contact.kinematics import contact_geometry
+from dda.result import Frame
+
+__all__ = ["Recorder", "frame", "pair_forces"]
+
+
+def frame(model, state) -> Frame:
+    """A committed state as a :class:`dda.result.Frame` (what a writer writes)."""
+    ints = geometry.polygon_integrals(state.x, model.offsets, model.topo.nxt)
+    blk = model.topo.block
+    t = geometry.t_matrix(state.x, ints.centroid[blk])
+    vv = np.einsum("vij,vj->vi", t, state.velocity[blk])
+    c = state.contacts
+    closed = c.state != OPEN
+    if len(c):
+        g = contact_geometry(state.x, c.vertex, c.edge, model.topo.nxt)
+        point, normal = g.p1, g.normal
+    else:
+        point = normal = np.zeros((0, 2))
+    return Frame(
+        time=state.time, vertices=state.x.copy(), offsets=model.offsets,
+        vertex_displacement=state.x - model.x_initial, vertex_velocity=vv,
+        displacement=ints.centroid - model.centroid_initial, velocity=state.velocity.copy(),
+        rotation=state.rotation.copy(), stress=state.stress.copy(),
+        contact_point=point[closed], contact_normal=normal[closed],
+        contact_blocks=np.stack([c.bj, c.bk], axis=1)[closed],
+        normal_force=-c.t_n[closed], shear_force=c.t_s[closed],
+        contact_state=c.state[closed].astype(np.int64),
+    )
+
+
+def pair_forces(model, state):
+    """Per block pair with closed contacts: its :func:`dda.contact.contacts.pair_key`, the
+    total force on the higher-index block, and the normal weighted by the normal forces."""
+    c = state.contacts
+    closed = np.flatnonzero(c.state != OPEN)
+    if len(closed) == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2))
+    g = contact_geometry(state.x, c.vertex[closed], c.edge[closed], model.topo.nxt)
+    bj, bk = c.bj[closed], c.bk[closed]
+    t_n, t_s = c.t_n[closed], c.t_s[closed]
+    on_j = -(t_n[:, None] * g.normal + t_s[:, None] * g.tau)
+    j_high = bj > bk
+    sign = np.where(j_high, 1.0, -1.0)[:, None]
+    force = sign * on_j
+    normal = sign * g.normal * np.abs(t_n)[:, None]
+    keys, inv = np.unique(pair_key(bj, bk, model.n_blocks), return_inverse=True)
+    f = np.zeros((len(keys), 2))
+    n = np.zeros((len(keys), 2))
+    np.add.at(f, inv, force)
+    np.add.at(n, inv, normal)
+    return keys, f, n
+
+
+class Recorder:
+    """Keeps every ``every``-th committed state of a run (and the last) and writes it.
+
+    Parameters
+    ----------
+    model : dda.model.Model
+    result : dda.result.Result that receives the rows
+    writer : optional writer (``write(frame)``, ``close()``, optionally ``last_time``)
+    every : record every this many steps
+    written : ``(writer, time)`` of the last frame written by an earlier run of the same
+        simulation: a run that goes on starts at that frame and must not write it twice
+    """
+
+    def __init__(self, model, result, writer=None, every: int = 1, written=(None, None)):
+        self.model, self.result, self.writer, self.every = model, result, writer, every
+        self.written = written
+        self.since = 0
+
+    def start(self, state) -> None:
+        """Record the state a run starts from."""
+        self._record(state)
+
+    def committed(self, state, last: bool) -> None:
+        """A step was committed; record it when it is the ``every``-th or the ``last``."""
+        self.since += 1
+        if self.since >= self.every or last:
+            self._record(state)
+            self.since = 0
+
+    def _record(self, state):
+        keys, f, n = pair_forces(self.model, state)
+        # the result needs block centroids only; a full Frame is built when a writer asks
+        self.result.record(state.time, state.centroid - self.model.centroid_initial,
+                           state.rotation, state.velocity, state.stress, keys, f, n)
+        writer = self.writer
+        if writer is None:
+            return
+        last = getattr(writer, "last_time", None)
+        if last is None and writer is self.written[0]:
+            last = self.written[1]
+        if last != state.time:
+            writer.write(frame(self.model, state))
+            self.result.frames_written += 1
+            self.written = (writer, state.time)

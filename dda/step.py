@@ -1,0 +1,322 @@
+"""One DDA time step as a pure function: ``step(model, state, dt, solver) -> (trial, report)``.
+
+The step builds its problem from the committed :class:`StepState` alone (METHOD.md sections 1
+to 5): the block system (stiffness, Newmark inertia, loads, constraint springs), the known
+motion of fixed, shaken and moved blocks, contact detection with the committed contacts
+carried over, the contact element; a :class:`dda.solvers.NonlinearSolver` solves it. The trial
+is then accepted or refused by three checks, and a refused trial is simply dropped:
+
+- no vertex may move farther than half the contact search distance (two blocks closing on
+  each other close their gap by twice the largest move; beyond it a contact may be missed);
+- no free block may move farther than ``max_displacement_ratio`` of its size;
+- the penetration guard (:func:`dda.contact.penetration.penetration_guard`).
+
+Nothing here changes its inputs: a step that is refused costs nothing to undo, and the
+caller (:class:`dda.Simulation`) decides what to do with the report (cut dt, widen the
+search, stop).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from dda import geometry
+from dda.contact.contacts import ContactSet, carry_over
+from dda.contact.detection import (
+    CandidateContacts,
+    bounding_boxes,
+    broad_phase,
+    narrow_phase,
+)
+from dda.contact.element import ContactElement, LawGroups
+from dda.contact.penetration import penetration_guard
+from dda.errors import SimulationError
+from dda.model import Model
+from dda.profiling import section
+from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
+from dda.solvers.newmark import effective_system, updated_velocity
+
+__all__ = ["StepSettings", "StepState", "StepReport", "step", "search_distance",
+           "deepest_spring", "SEARCH_FACTOR"]
+
+# the search distance is this multiple of the step's predicted largest vertex displacement
+SEARCH_FACTOR = 2.5
+
+
+@dataclass(frozen=True)
+class StepSettings:
+    """How a step is taken (the :class:`dda.Simulation` arguments of the same names)."""
+
+    velocity_carry: float = 1.0
+    max_open_close: int = 12
+    max_displacement_ratio: float = 0.25
+    penetration_tolerance: float = 0.01
+
+
+@dataclass(frozen=True)
+class StepState:
+    """Everything a step changes: the state of the blocks and contacts at one time.
+
+    Attributes
+    ----------
+    time : s
+    x : (n_vertices, 2) vertex positions
+    velocity : (n_blocks, 6) block velocities
+    stress : (n_blocks, 3) block stresses
+    rotation : (n_blocks,) rigid rotation from the start
+    centroid : (n_blocks, 2) block centroids
+    contacts : the committed contacts with their law histories
+    load_points, spring_points : where the material points of loads and springs are now
+    known_u : (n_blocks, 2) known translation of the blocks whose motion is given
+    shaking : the shaking integrators' states, one per shaken block
+    last_move : the largest vertex displacement of the last step (m)
+    untracked : the deepest untracked penetration left in this state, in tolerances
+    penetration : the deepest vertex inside another block, tracked or not (m)
+    """
+
+    time: float
+    x: np.ndarray
+    velocity: np.ndarray
+    stress: np.ndarray
+    rotation: np.ndarray
+    centroid: np.ndarray
+    contacts: ContactSet
+    load_points: np.ndarray
+    spring_points: np.ndarray
+    known_u: np.ndarray
+    shaking: tuple = ()
+    last_move: float = 0.0
+    untracked: float = 0.0
+    penetration: float = 0.0
+
+    @classmethod
+    def initial(cls, model: Model) -> StepState:
+        """The state a run of ``model`` starts from."""
+        nb = model.n_blocks
+        return cls(time=0.0, x=model.x_initial.copy(), velocity=model.initial_velocity(),
+                   stress=np.zeros((nb, 3)), rotation=np.zeros(nb),
+                   centroid=model.centroid_initial.copy(), contacts=model.initial_contacts(),
+                   load_points=model.load_initial.copy(),
+                   spring_points=model.spring_initial.copy(), known_u=np.zeros((nb, 2)),
+                   shaking=tuple(s.history.initial() for s in model.shakes))
+
+
+@dataclass(frozen=True)
+class StepReport:
+    """How a step went: converged or why not, and what it cost."""
+
+    converged: bool
+    reason: str = ""
+    iterations: int = 0
+    open_close_passes: int = 0
+    residual_norms: list = field(default_factory=list)
+    search_hint: float = 0.0  # a wider search distance a retry should use (m)
+    unknowns: int = 0
+    pairs: int = 0
+    penetration: float = 0.0
+    spring_penetration: float = 0.0
+    untracked: float = 0.0  # the deepest untracked penetration, in penetration tolerances
+
+    @classmethod
+    def of(cls, sol: StepSolution, unknowns: int, pairs: int) -> StepReport:
+        return cls(sol.converged, sol.reason, sol.iterations, sol.open_close_passes,
+                   list(sol.residual_norms), unknowns=unknowns, pairs=pairs)
+
+
+@dataclass(frozen=True)
+class _Detected:
+    contacts: ContactSet
+    fresh: np.ndarray
+    geometry: object
+    pairs: np.ndarray
+    n_pairs: int
+
+
+def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
+         settings: StepSettings | None = None,
+         search_hint: float = 0.0) -> tuple[StepState | None, StepReport]:
+    """Take one step of ``dt`` from ``state``: the trial state, or None, and the report.
+
+    ``search_hint`` widens the contact search distance (m) after a step that moved farther
+    than predicted. Raises :class:`dda.SimulationError` when two blocks meet that have no
+    joint.
+    """
+    settings = settings or StepSettings()
+    t1 = state.time + dt
+    ints = geometry.polygon_integrals(state.x, model.offsets, model.topo.nxt)
+    k, m, c, f = model.block_forces(t1, ints, state.stress, state.load_points,
+                                    state.spring_points)
+    # a static analysis carries no velocity: no inertial force term
+    carry = settings.velocity_carry
+    v_eff = state.velocity * carry if carry else None
+    k_eff, f_eff = effective_system(k, m, f, v_eff, dt, c)
+    known_u, known_v, shaking = model.known_motion(t1, state.known_u, state.shaking)
+    d_known = np.zeros((model.n_blocks, 6))
+    d_known[:, :2] = known_u - state.known_u
+    d_known[model.free] = 0.0
+    d0 = search_distance(model, state, dt, carry, ints.centroid, d_known[~model.free, :2],
+                         search_hint)
+    found = _detect(model, state, d0, settings.penetration_tolerance)
+    element = _element(model, state, found, ints.centroid)
+    problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
+                          d_known=d_known, element=element,
+                          max_open_close=settings.max_open_close, rigid=model.rigid)
+    sol = solver.solve_step(problem)
+    report = StepReport.of(sol, problem.pattern.unknowns, found.n_pairs)
+    if not sol.converged:
+        return None, report
+    move = geometry.vertex_displacements(state.x, ints.centroid[model.topo.block],
+                                         sol.d[model.topo.block])
+    refused = _check_moves(model, move, d0, settings.max_displacement_ratio)
+    if refused is not None:
+        return None, replace(report, converged=False, reason=refused[0],
+                             search_hint=refused[1])
+    x_new = state.x + move
+    with section("guard"):
+        # no vertex moved farther than d0 (checked above), so the pairs whose boxes
+        # overlap at the end of the step are among the detection's, grown by d0
+        guard = penetration_guard(model, x_new, sol.contacts, element.normal_penalty,
+                                  found.pairs, settings.penetration_tolerance)
+    report = replace(report, penetration=guard.deepest,
+                     spring_penetration=guard.spring_deepest, untracked=guard.untracked)
+    if guard.reason:
+        return None, replace(report, converged=False, reason=guard.reason)
+    trial = _advanced(model, state, dt, sol, ints.centroid, x_new, move, v_eff,
+                      (known_u, known_v, d_known, shaking))
+    return replace(trial, untracked=guard.untracked, penetration=guard.deepest), report
+
+
+def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0) -> float:
+    """How far from a vertex contacts are looked for in a step (m).
+
+    ``SEARCH_FACTOR`` times the largest of the predicted vertex displacement (velocity times
+    dt plus the fall under gravity), the known blocks' moves, the last step's largest move
+    and the hint, plus a floor of 1e-6 of the smallest block. ``centroid`` are the blocks'
+    centroids at the step's start.
+    """
+    t = geometry.t_matrix(state.x, centroid[model.topo.block])
+    vv = np.einsum("vij,vj->vi", t, state.velocity[model.topo.block] * carry)
+    predicted = np.max(np.hypot(vv[:, 0], vv[:, 1])) * dt if len(vv) else 0.0
+    predicted += 0.5 * abs(model.gravity or 0.0) * dt * dt
+    if len(known_du):
+        predicted = max(predicted, float(np.max(np.hypot(known_du[:, 0], known_du[:, 1]))))
+    floor = 1e-6 * float(np.min(model.size))
+    return SEARCH_FACTOR * max(predicted, state.last_move, search_hint) + floor
+
+
+def deepest_spring(model, contacts) -> float:
+    """Deepest penetration of the committed closed springs (m)."""
+    closed = contacts.state != 0
+    if not closed.any():
+        return 0.0
+    pn = model.joints.normal_penalty[model.joint_index(contacts.bj[closed],
+                                                       contacts.bk[closed])]
+    return float(np.max(-contacts.t_n[closed] / pn))
+
+
+def _detect(model, state, d0, tolerance) -> _Detected:
+    """The step's contacts: detection within ``d0``, the committed ones carried over."""
+    # how deep behind an edge a vertex is still taken for a contact: twice the deepest
+    # vertex of the committed state (found by the guard, tracked or not) plus the search
+    # distance; detection takes a negative gap only for a vertex inside the edge's block, so
+    # no far edge of a thin block is taken for a contact (soft penalties let contacts sink
+    # further than a fixed limit, and a closed contact must never be lost)
+    pen_limit = max(2.0 * d0, 1e-3 * float(np.min(model.size)),
+                    2.0 * max(deepest_spring(model, state.contacts), state.penetration) + d0)
+    topo = model.topo
+    if model.n_blocks > 1:
+        with section("detection"):
+            # a vertex sunk deeper than a quarter of the guard's tolerance is held by the
+            # edge nearest to it, and two such corners get a spring each
+            sunk = 0.25 * tolerance * float(np.min(model.thickness))
+            pairs = _pairs(model, state.x, max(d0, pen_limit))
+            cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk)
+            contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt,
+                                               topo.prv, model.n_blocks)
+    else:  # a single block: nothing to detect
+        pairs = np.zeros((0, 2), dtype=np.int64)
+        cand = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
+        contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt, topo.prv,
+                                           model.n_blocks)
+    return _Detected(contacts, fresh, geom, pairs, cand.pairs)
+
+
+def _pairs(model, x, margin) -> np.ndarray:
+    """Block pairs whose boxes, grown by ``margin``, overlap, less those of two blocks whose
+    motion is known (fixed, shaken, moved): a contact between them acts on no unknown, and
+    its spring (two fixed blocks built touching or overlapping) would only hold fictitious
+    energy."""
+    pairs = broad_phase(bounding_boxes(x, model.offsets), margin)
+    return pairs[model.free[pairs[:, 0]] | model.free[pairs[:, 1]]]
+
+
+def _element(model, state, found: _Detected, centroid) -> ContactElement:
+    """The contact element of the detected contacts, each with its joint's penalties and law
+    (new and open contacts get their law's initial history)."""
+    contacts = found.contacts
+    joint = model.joint_index(contacts.bj, contacts.bk)
+    if np.any(joint < 0):
+        i = int(np.flatnonzero(joint < 0)[0])
+        raise SimulationError(
+            f"no joint between {model.block_label(contacts.bj[i])} and "
+            f"{model.block_label(contacts.bk[i])}; set a default joint"
+        )
+    laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
+    laws.initial_history(contacts.history, found.fresh)
+    return ContactElement(contacts, state.x, centroid, model.topo.nxt, model.topo.prv,
+                          model.joints.normal_penalty[joint],
+                          model.joints.shear_penalty[joint], laws, found.geometry)
+
+
+def _check_moves(model, move, d0, max_ratio):
+    """None when the step's moves are acceptable, else ``(reason, search hint)``."""
+    distance = np.hypot(move[:, 0], move[:, 1])
+    largest = float(np.max(distance))
+    # two blocks closing on each other close their gap by up to twice the largest move: a
+    # vertex that moved more than half the search distance may have met an edge that was
+    # not searched
+    if 2.0 * largest > d0:
+        return (f"a vertex moved {largest:.3g} m, more than half the contact search "
+                f"distance {d0:.3g} m", 2.0 * largest)
+    per_block = np.zeros(model.n_blocks)
+    np.maximum.at(per_block, model.topo.block, distance)
+    ratio = np.where(model.free, per_block / model.size, 0.0)
+    worst = int(np.argmax(ratio))
+    if ratio[worst] > max_ratio:
+        return (f"{model.block_label(worst)} moved {per_block[worst]:.3g} m in one step, more "
+                f"than max_displacement_ratio {max_ratio:g} of its size "
+                f"{model.size[worst]:.3g} m", 0.0)
+    return None
+
+
+def _advanced(model, state, dt, sol, centroid, x_new, move, v_eff, known) -> StepState:
+    """The trial state at the end of an accepted step (Newmark update, METHOD.md s. 2)."""
+    known_u, known_v, d_known, shaking = known
+    d = sol.d
+    free = model.free
+    vel = np.where(free[:, None], updated_velocity(d, v_eff, dt), 0.0)
+    if model.rigid is not None:
+        vel[model.rigid, 3:] = 0.0
+    vel[~free, :2] = known_v[~free]
+    for mo in model.full_motions:
+        vel[mo.block, :2] = d_known[mo.block, :2] / dt
+    stress = state.stress + np.where(
+        free[:, None], np.einsum("bij,bj->bi", model.elasticity, d[:, 3:]), 0.0)
+    load_points = state.load_points
+    if len(model.load_block):
+        load_points = load_points + geometry.vertex_displacements(
+            load_points, centroid[model.load_block], d[model.load_block])
+    spring_points = state.spring_points
+    if len(model.spring_block):
+        spring_points = spring_points + geometry.vertex_displacements(
+            spring_points, centroid[model.spring_block], d[model.spring_block])
+    return StepState(
+        time=state.time + dt, x=x_new, velocity=vel, stress=stress,
+        rotation=state.rotation + d[:, 2],
+        # a step maps each block affinely, which carries its centroid by (u0, v0)
+        centroid=centroid + d[:, :2], contacts=sol.contacts, load_points=load_points,
+        spring_points=spring_points, known_u=known_u, shaking=shaking,
+        last_move=float(np.max(np.hypot(move[:, 0], move[:, 1]))),
+    )
