@@ -180,3 +180,28 @@ def test_the_registry_imports_cleanly_first_and_loads_the_classes_on_first_use()
     with open(registry.__file__) as fh:
         top = [line for line in fh if line.startswith(("import ", "from "))]
     assert not [line for line in top if "dda" in line], top
+
+
+def test_the_sweep_takes_its_solvers_from_the_registry(tmp_path, monkeypatch):
+    from dda.studies import sweep
+    from dda.studies.sweep import SOLVERS, make_solver
+
+    assert SOLVERS == registry.solver_names() == ("legacy", "newton")
+    assert isinstance(make_solver("legacy"), LegacyPullBack)
+    assert make_solver("newton", max_iter=7).max_iter == 7
+    try:
+        registry.register_solver(Quick)
+        assert sweep.SOLVERS == ("legacy", "newton", "quick")
+        assert isinstance(make_solver("quick"), Quick)
+    finally:
+        registry.unregister_solver("quick")
+    with pytest.raises(ValueError, match="unknown solver 'quick'; use one of legacy, newton"):
+        make_solver("quick")
+    # an import path works in fresh worker processes too (nothing to register there)
+    (tmp_path / "reg_solvers.py").write_text(
+        "from dda.solvers import LegacyPullBack\n\n\nclass Plain(LegacyPullBack):\n"
+        "    name = 'plain'\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert type(make_solver("reg_solvers:Plain")).__name__ == "Plain"
+    with pytest.raises(AttributeError, match="no attribute 'NOTHING'"):
+        sweep.NOTHING  # noqa: B018
