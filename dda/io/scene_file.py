@@ -93,6 +93,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dda import registry
+
 try:
     import tomllib
 except ModuleNotFoundError:  # Python 3.10
@@ -322,12 +324,6 @@ class LoadedScene:
         return VTUWriter(folder / self.prefix, every=self.every)
 
 
-_LAWS = {"coulomb": ("CoulombSingle", {"phi", "cohesion"}),
-         "transition": ("StaticDynamicTransition", {"phi_static", "phi_dynamic", "onset"}),
-         "barton": ("BartonBandis", {"jrc", "jcs", "phi_r", "mobilized", "slip_at_peak",
-                                     "block_size", "dilation", "max_angle"})}
-
-
 #: the tables of a scene file, in the order they are read
 _TABLES = ("scene", "materials", "blocks", "cut", "joints", "shake", "prescribe", "load",
            "damping", "simulation", "output")
@@ -377,7 +373,7 @@ def load_scene(path) -> LoadedScene:
     blocks.update(_read_cuts(r, data, materials, scene.add_block))
     if not blocks:
         raise r.error((), "no blocks: add [[blocks]] or [[cut]] tables")
-    _read_joints(r, data, blocks, scene.set_joint)
+    _read_joints(r, data, blocks, scene.set_joint, path.parent)
     effects += _read_shaking(r, data, blocks, scene.shake, path.parent)
     effects += _read_motions(r, data, blocks, scene.prescribe_motion)
     effects += _read_loads(r, data, blocks, scene.add_point_load)
@@ -514,11 +510,12 @@ def _block_of(r, blocks, spec, p, key="block"):
     return blocks[name]
 
 
-def _read_joints(r, data, blocks, set_joint):
-    """``[joints.default]`` and ``[[joints.pair]]``, each given to ``set_joint``."""
+def _read_joints(r, data, blocks, set_joint, folder):
+    """``[joints.default]`` and ``[[joints.pair]]``, each given to ``set_joint`` (a law's
+    module named by import path is looked for in ``folder`` first)."""
     joints = r.table(data.get("joints", {}), ("joints",), {"default", "pair"})
     if "default" in joints:
-        set_joint(_joint(r, joints["default"], ("joints", "default")))
+        set_joint(_joint(r, joints["default"], ("joints", "default"), folder))
     for i, jp in enumerate(_array(r, joints, "pair", ("joints", "pair"))):
         p = ("joints", "pair", i)
         if not isinstance(jp.get("between"), list) or len(jp["between"]) != 2:
@@ -527,35 +524,45 @@ def _read_joints(r, data, blocks, set_joint):
             if name not in blocks:
                 raise r.error((*p, "between"), f"no block {name!r}")
         a, b = (blocks[name] for name in jp["between"])
-        r.call(p, set_joint, _joint(r, jp, p, extra=("between",)), between=(a, b))
+        r.call(p, set_joint, _joint(r, jp, p, folder, extra=("between",)), between=(a, b))
 
 
-def _joint(r, spec, p, extra=()):
+def _joint(r, spec, p, folder, extra=()):
     """The :class:`dda.contact.JointMaterial` of a joint table."""
     from dda.contact import JointMaterial
 
     r.table(spec, p, {"normal_penalty", "shear_penalty", "friction", *extra})
-    law = _read_friction(r, spec.get("friction"), (*p, "friction"))
+    law = _read_friction(r, spec.get("friction"), (*p, "friction"), folder)
     return r.call(p, JointMaterial,
                   normal_penalty=r.number(spec, p, "normal_penalty", positive=True),
                   shear_penalty=r.number(spec, p, "shear_penalty", positive=True),
                   friction=law)
 
 
-def _read_friction(r, fr, p):
-    """The friction law of a joint's ``friction`` table (``p`` is its path)."""
-    from dda import contact
-
-    if not isinstance(fr, dict) or fr.get("law") not in _LAWS:
+def _read_friction(r, fr, p, folder):
+    """The friction law of a joint's ``friction`` table (``p`` is its path): a name of
+    :func:`dda.registry.law_names` or an import path ``"module:Class"`` (its module looked for
+    in ``folder`` first), with the law's keyword arguments beside it."""
+    names = registry.law_names()
+    law = fr.get("law") if isinstance(fr, dict) else None
+    if not isinstance(law, str) or (law not in names and ":" not in law):
         raise r.error(p, "must be a table with law = "
-                      f"{' or '.join(repr(k) for k in _LAWS)}")
-    cls_name, known = _LAWS[fr["law"]]
+                      f"{' or '.join(repr(k) for k in names)}, or an import path "
+                      "'module:Class'")
+    try:
+        cls = registry.law_class(law, folder=folder)
+    except registry.RegistryError as exc:
+        raise r.error(p, str(exc)) from None
     args = {k: v for k, v in fr.items() if k != "law"}
-    for k in args:
-        if k not in known:
-            raise r.error(p, f"unknown key '{k}' for law {fr['law']!r} "
-                          f"(known: {', '.join(sorted(known))})")
-    return r.call(p, getattr(contact, cls_name), **args)
+    for k in registry.unknown_keywords(cls, args):
+        known = ", ".join(sorted(registry.parameters(cls))) or "none"
+        raise r.error(p, f"unknown key '{k}' for law {law!r} (known: {known})")
+    if law in names:
+        return r.call(p, cls, **args)
+    try:  # a class of the user's: whatever it raises gets the file's line
+        return cls(**args)
+    except Exception as exc:
+        raise r.error(p, f"law {law!r} raised {type(exc).__name__}: {exc}") from None
 
 
 def _read_shaking(r, data, blocks, shake, folder) -> list:
@@ -660,9 +667,10 @@ def _read_simulation(r, data, settings):
     """``[simulation]``: the solver, the :class:`dda.Simulation` keyword arguments (the keys
     ``settings`` that are given; dt always) and the duration (None when left out)."""
     p = ("simulation",)
-    sim = r.table(data.get("simulation", {}), p, {*settings, "duration", "solver", "tol",
-                                                   "max_iter"})
-    solver = _read_solver(r, sim, p)
+    solver_keys = _solver_keys(settings)
+    sim = r.table(data.get("simulation", {}), p, {*settings, "duration", "solver",
+                                                   *solver_keys})
+    solver = _read_solver(r, sim, p, solver_keys)
     kwargs = {"dt": r.number(sim, p, "dt", positive=True)}
     for k in settings:
         if k != "dt" and k in sim:
@@ -671,19 +679,31 @@ def _read_simulation(r, data, settings):
     return solver, kwargs, duration
 
 
-def _read_solver(r, sim, p):
-    """The solver of the ``[simulation]`` table ``sim``."""
-    from dda.solvers import LegacyPullBack, NewtonRaphson
+def _solver_keys(settings) -> list:
+    """The keys of ``[simulation]`` that set a registered solver (tol, max_iter, ...)."""
+    keys = {}
+    for name in registry.solver_names():
+        for k in registry.parameters(registry.solver_class(name)):
+            keys.setdefault(k)
+    return [k for k in keys if k not in settings and k not in ("duration", "solver")]
 
-    solver_name = sim.get("solver", "newton")
-    if solver_name == "newton":
-        kw = {k: sim[k] for k in ("tol", "max_iter") if k in sim}
-        return r.call(p, NewtonRaphson, **kw)
-    if solver_name == "legacy":
-        if "tol" in sim or "max_iter" in sim:
-            raise r.error(p, "tol and max_iter are Newton's settings (solver = \"newton\")")
-        return LegacyPullBack()
-    raise r.error((*p, "solver"), f"must be 'newton' or 'legacy', got {solver_name!r}")
+
+def _read_solver(r, sim, p, solver_keys):
+    """The solver of the ``[simulation]`` table ``sim``: a name of
+    :func:`dda.registry.solver_names` (default "newton") with its settings beside it."""
+    names = registry.solver_names()
+    name = sim.get("solver", "newton")
+    if not isinstance(name, str) or name not in names:
+        shown = " or ".join(repr(n) for n in ("newton", *(n for n in names if n != "newton")))
+        raise r.error((*p, "solver"), f"must be {shown}, got {name!r}")
+    cls = registry.solver_class(name)
+    wrong = [k for k in registry.unknown_keywords(cls, sim) if k in solver_keys]
+    if wrong:
+        takes = ", ".join(registry.parameters(cls)) or "none"
+        what = "is not a setting" if len(wrong) == 1 else "are not settings"
+        raise r.error(p, f"{' and '.join(wrong)} {what} of solver = {name!r} (it takes: "
+                      f"{takes})")
+    return r.call(p, cls, **{k: sim[k] for k in solver_keys if k in sim})
 
 
 def _read_output(r, data, path, keys) -> dict:
