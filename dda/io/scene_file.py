@@ -22,6 +22,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     shear_penalty = 5e10
     friction = { law = "coulomb", phi = 35.0, cohesion = 0.0 }
     # law = "transition": phi_static, phi_dynamic; law = "barton": jrc, jcs, phi_r, ...
+    # law = "my_laws:BrittleCohesion": a law of your own, by import path (see below)
 
     [[joints.pair]]
     between = ["base", "top"]
@@ -70,7 +71,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     [simulation]
     dt = 1e-3
     duration = 1.0
-    solver = "newton"                     # or "legacy"; tol and max_iter for newton
+    solver = "newton"                     # or "legacy" (see below); tol, max_iter: newton's
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
                                           # record_every, max_displacement_ratio,
                                           # penetration_tolerance
@@ -81,6 +82,35 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     dir = "out"                           # relative to the scene file; --out overrides
     checkpoint = "case.ckpt"              # optional, in the output folder; resume with
     checkpoint_every = 100                # dda.Simulation.resume (see Simulation.run)
+
+Friction laws and solvers are named as :mod:`dda.registry` knows them, each class by its
+``name`` attribute: ``law = "coulomb"`` (:class:`dda.contact.CoulombSingle`), ``"transition"``
+(:class:`~dda.contact.StaticDynamicTransition`), ``"barton"`` (:class:`~dda.contact.BartonBandis`);
+``solver = "newton"`` (:class:`dda.solvers.NewtonRaphson`, the default) or ``"legacy"``
+(:class:`~dda.solvers.LegacyPullBack`). The keys beside ``law`` in a friction table, and a
+solver's keys in ``[simulation]``, are the keyword arguments of the class's constructor (read
+from its signature; an unknown key is an error that lists them). A class registered with
+:func:`dda.registry.register_law` or :func:`~dda.registry.register_solver` before the file is
+read is named the same way.
+
+A friction law of your own needs no registering: name it by import path, ``"module:Class"``,
+with its keyword arguments in the same table::
+
+    friction = { law = "my_laws:BrittleCohesion", phi = 30, cohesion = 5e4 }
+
+- ``my_laws`` is looked for first in the scene file's folder (``my_laws.py`` or a package
+  ``my_laws/`` beside it; the folder is on ``sys.path`` only while the module is imported),
+  then on the normal path. A dotted path after the colon reaches a nested attribute
+  (``"pkg.laws:Outer.Inner"``); nothing is evaluated.
+- The class must be a subclass of :class:`dda.contact.FrictionLaw`. A module not found, an
+  attribute not there, an object of another kind, an unknown key and an error raised by the
+  constructor are each a :class:`SceneFileError` naming the line of the friction table.
+- The module is imported once per process, as any import: an edited module needs a new
+  process, and two scene files whose folders hold different modules of one name cannot be
+  read in the same process (an error says so).
+- A checkpoint of such a run refers to the class by its module: to resume it the module must
+  be importable (``cd`` to the scene's folder and ``python -m dda run OUT/RUN.ckpt``, or put
+  the folder on ``PYTHONPATH``).
 """
 
 from __future__ import annotations
