@@ -22,6 +22,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     shear_penalty = 5e10
     friction = { law = "coulomb", phi = 35.0, cohesion = 0.0 }
     # law = "transition": phi_static, phi_dynamic; law = "barton": jrc, jcs, phi_r, ...
+    # law = "my_laws:BrittleCohesion": a law of your own, by import path (see below)
 
     [[joints.pair]]
     between = ["base", "top"]
@@ -70,7 +71,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     [simulation]
     dt = 1e-3
     duration = 1.0
-    solver = "newton"                     # or "legacy"; tol and max_iter for newton
+    solver = "newton"                     # or "legacy" (see below); tol, max_iter: newton's
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
                                           # record_every, max_displacement_ratio,
                                           # penetration_tolerance
@@ -81,6 +82,35 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     dir = "out"                           # relative to the scene file; --out overrides
     checkpoint = "case.ckpt"              # optional, in the output folder; resume with
     checkpoint_every = 100                # dda.Simulation.resume (see Simulation.run)
+
+Friction laws and solvers are named as :mod:`dda.registry` knows them, each class by its
+``name`` attribute: ``law = "coulomb"`` (:class:`dda.contact.CoulombSingle`), ``"transition"``
+(:class:`~dda.contact.StaticDynamicTransition`), ``"barton"`` (:class:`~dda.contact.BartonBandis`);
+``solver = "newton"`` (:class:`dda.solvers.NewtonRaphson`, the default) or ``"legacy"``
+(:class:`~dda.solvers.LegacyPullBack`). The keys beside ``law`` in a friction table, and a
+solver's keys in ``[simulation]``, are the keyword arguments of the class's constructor (read
+from its signature; an unknown key is an error that lists them). A class registered with
+:func:`dda.registry.register_law` or :func:`~dda.registry.register_solver` before the file is
+read is named the same way.
+
+A friction law of your own needs no registering: name it by import path, ``"module:Class"``,
+with its keyword arguments in the same table::
+
+    friction = { law = "my_laws:BrittleCohesion", phi = 30, cohesion = 5e4 }
+
+- ``my_laws`` is looked for first in the scene file's folder (``my_laws.py`` or a package
+  ``my_laws/`` beside it; the folder is on ``sys.path`` only while the module is imported),
+  then on the normal path. A dotted path after the colon reaches a nested attribute
+  (``"pkg.laws:Outer.Inner"``); nothing is evaluated.
+- The class must be a subclass of :class:`dda.contact.FrictionLaw`. A module not found, an
+  attribute not there, an object of another kind, an unknown key and an error raised by the
+  constructor are each a :class:`SceneFileError` naming the line of the friction table.
+- The module is imported once per process, as any import: an edited module needs a new
+  process, and two scene files whose folders hold different modules of one name cannot be
+  read in the same process (an error says so).
+- A checkpoint of such a run refers to the class by its module: to resume it the module must
+  be importable (``cd`` to the scene's folder and ``python -m dda run OUT/RUN.ckpt``, or put
+  the folder on ``PYTHONPATH``).
 """
 
 from __future__ import annotations
@@ -92,6 +122,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from dda import registry
 
 try:
     import tomllib
@@ -322,10 +354,9 @@ class LoadedScene:
         return VTUWriter(folder / self.prefix, every=self.every)
 
 
-_LAWS = {"coulomb": ("CoulombSingle", {"phi", "cohesion"}),
-         "transition": ("StaticDynamicTransition", {"phi_static", "phi_dynamic", "onset"}),
-         "barton": ("BartonBandis", {"jrc", "jcs", "phi_r", "mobilized", "slip_at_peak",
-                                     "block_size", "dilation", "max_angle"})}
+#: the tables of a scene file, in the order they are read
+_TABLES = ("scene", "materials", "blocks", "cut", "joints", "shake", "prescribe", "load",
+           "damping", "simulation", "output")
 
 
 def load_scene(path) -> LoadedScene:
@@ -361,12 +392,39 @@ def load_scene(path) -> LoadedScene:
     >>> round(float(result.displacement(loaded.blocks["stone"])[-1, 1]), 5)
     -0.04905
     """
-    import dda
-    from dda import contact
-    from dda.cutting import JointSet, cut_blocks
-    from dda.materials import LinearElastic
-    from dda.solvers import LegacyPullBack, NewtonRaphson
+    path, data, r = _read_file(path)
+    scene, effects = _read_scene(r, data)
+    materials = _read_materials(r, data)
+    # [[blocks]], [simulation] and [output] mirror the arguments of Scene.add_block,
+    # Simulation and Simulation.run: their keys are listed here, where a test checks that
+    # every setting of the API has one
+    blocks = _read_blocks(r, data, materials, scene.add_block, keys={
+        "name", "material", "vertices", "fixed", "rigid", "velocity", "angular_velocity"})
+    blocks.update(_read_cuts(r, data, materials, scene.add_block))
+    if not blocks:
+        raise r.error((), "no blocks: add [[blocks]] or [[cut]] tables")
+    _read_joints(r, data, blocks, scene.set_joint, path.parent)
+    effects += _read_shaking(r, data, blocks, scene.shake, path.parent)
+    effects += _read_motions(r, data, blocks, scene.prescribe_motion)
+    effects += _read_loads(r, data, blocks, scene.add_point_load)
+    _read_damping(r, data, blocks, scene.set_damping)
+    if scene.damping_coefficients() is not None:
+        effects.append("damping")
+    solver, settings, duration = _read_simulation(r, data, settings=(
+        "dt", "analysis", "velocity_carry", "max_open_close", "record_every",
+        "max_displacement_ratio", "penetration_tolerance"))
+    output = _read_output(r, data, path, keys={"dir", "prefix", "every", "checkpoint",
+                                               "checkpoint_every"})
+    loaded = LoadedScene(scene, blocks, solver, settings, duration, path=path, effects=effects,
+                         **output)
+    # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
+    r.call(("simulation",), loaded.simulation)
+    return loaded
 
+
+# ---------------------------------------------------------------------- one reader a table
+def _read_file(path):
+    """The path, the parsed TOML and a :class:`_Reader` of the file at ``path``."""
     path = Path(path)
     if not path.is_file():
         raise SceneFileError(f"no scene file {path}")
@@ -376,13 +434,23 @@ def load_scene(path) -> LoadedScene:
     except tomllib.TOMLDecodeError as exc:
         raise SceneFileError(f"{path.name}: not valid TOML: {exc}") from None
     r = _Reader(path.name, key_lines(text))
-    r.table(data, (), {"scene", "materials", "joints", "blocks", "cut", "shake", "prescribe",
-                       "load", "damping", "simulation", "output"})
+    r.table(data, (), set(_TABLES))
+    return path, data, r
+
+
+def _read_scene(r, data):
+    """``[scene]``: the :class:`dda.Scene` and the effects it has (gravity)."""
+    from dda.scene import Scene
 
     sc = r.table(data.get("scene", {}), ("scene",), {"gravity"})
     gravity = r.number(sc, ("scene",), "gravity", default=0.0)
-    scene = r.call(("scene",), dda.Scene, gravity=gravity or None)
-    effects = ["gravity"] if gravity else []
+    scene = r.call(("scene",), Scene, gravity=gravity or None)
+    return scene, ["gravity"] if gravity else []
+
+
+def _read_materials(r, data) -> dict:
+    """``[materials.NAME]``: the materials by name."""
+    from dda.materials import LinearElastic
 
     materials = {}
     for name, m in r.table(data.get("materials", {}), ("materials",), set(
@@ -393,39 +461,46 @@ def load_scene(path) -> LoadedScene:
         if "plane" in m:
             kwargs["plane"] = m["plane"]
         materials[name] = r.call(p, LinearElastic, **kwargs)
+    return materials
 
-    def material(spec, p):
-        if "material" not in spec:
-            raise r.error(p, "needs 'material'")
-        name = spec["material"]
-        if name not in materials:
-            raise r.error((*p, "material"), f"no material {name!r} (there are: "
-                          f"{', '.join(materials) or 'none; add a [materials.NAME] table'})")
-        return materials[name]
 
+def _material(r, materials, spec, p):
+    """The material a block or cut table names."""
+    if "material" not in spec:
+        raise r.error(p, "needs 'material'")
+    name = spec["material"]
+    if name not in materials:
+        raise r.error((*p, "material"), f"no material {name!r} (there are: "
+                      f"{', '.join(materials) or 'none; add a [materials.NAME] table'})")
+    return materials[name]
+
+
+def _read_blocks(r, data, materials, add_block, keys) -> dict:
+    """``[[blocks]]``, each added with ``add_block``: the handles by name."""
     blocks = {}
     for i, b in enumerate(_array(r, data, "blocks")):
         p = ("blocks", i)
-        r.table(b, p, {"name", "material", "vertices", "fixed", "rigid", "velocity",
-                       "angular_velocity"})
+        r.table(b, p, keys)
         kwargs = {"fixed": _bool(r, b, p, "fixed"), "rigid": _bool(r, b, p, "rigid"),
                   "velocity": r.pair(b, p, "velocity", (0.0, 0.0)),
                   "angular_velocity": r.number(b, p, "angular_velocity", default=0.0)}
-        h = r.call(p, scene.add_block, r.points(b, p, "vertices"), material(b, p),
+        h = r.call(p, add_block, r.points(b, p, "vertices"), _material(r, materials, b, p),
                    name=b.get("name"), **kwargs)
         blocks[h.name] = h
+    return blocks
 
+
+def _read_cuts(r, data, materials, add_block) -> dict:
+    """``[[cut]]``: a domain cut by joint sets, each piece added with ``add_block``; the
+    handles by name."""
+    from dda.cutting import cut_blocks
+
+    blocks = {}
     for i, c in enumerate(_array(r, data, "cut")):
         p = ("cut", i)
         r.table(c, p, {"name", "material", "domain", "joint_sets", "min_size", "seed",
                        "fixed", "rigid"})
-        sets = []
-        if not isinstance(c.get("joint_sets"), list):
-            raise r.error(p, "needs 'joint_sets', a list of tables {dip, spacing, ...}")
-        for j, js in enumerate(c["joint_sets"]):
-            q = (*p, "joint_sets", j)
-            r.table(js, q, {"dip", "spacing", "offset", "persistence", "trace_length"})
-            sets.append(r.call(q, JointSet, **js))
+        sets = _joint_sets(r, c, p)
         kwargs = {}
         if "min_size" in c:
             kwargs["min_size"] = r.number(c, p, "min_size")
@@ -433,43 +508,44 @@ def load_scene(path) -> LoadedScene:
             kwargs["seed"] = int(r.number(c, p, "seed"))
         polys = r.call(p, cut_blocks, r.points(c, p, "domain"), sets, **kwargs)
         prefix = c.get("name", f"cut{i}_")
-        mat = material(c, p)
+        mat = _material(r, materials, c, p)
         for k, poly in enumerate(polys):
-            h = r.call(p, scene.add_block, poly, mat, name=f"{prefix}{k}",
+            h = r.call(p, add_block, poly, mat, name=f"{prefix}{k}",
                        fixed=_bool(r, c, p, "fixed"), rigid=_bool(r, c, p, "rigid"))
             blocks[h.name] = h
-    if not blocks:
-        raise r.error((), "no blocks: add [[blocks]] or [[cut]] tables")
+    return blocks
 
-    def block_of(spec, p, key="block"):
-        if key not in spec:
-            raise r.error(p, f"needs '{key}'")
-        name = spec[key]
-        if name not in blocks:
-            raise r.error((*p, key), f"no block {name!r}")
-        return blocks[name]
 
-    def joint(spec, p, extra=()):
-        r.table(spec, p, {"normal_penalty", "shear_penalty", "friction", *extra})
-        fr = spec.get("friction")
-        if not isinstance(fr, dict) or fr.get("law") not in _LAWS:
-            raise r.error((*p, "friction"), "must be a table with law = "
-                          f"{' or '.join(repr(k) for k in _LAWS)}")
-        cls_name, known = _LAWS[fr["law"]]
-        args = {k: v for k, v in fr.items() if k != "law"}
-        for k in args:
-            if k not in known:
-                raise r.error((*p, "friction"), f"unknown key '{k}' for law {fr['law']!r} "
-                              f"(known: {', '.join(sorted(known))})")
-        law = r.call((*p, "friction"), getattr(contact, cls_name), **args)
-        return r.call(p, contact.JointMaterial,
-                      normal_penalty=r.number(spec, p, "normal_penalty", positive=True),
-                      shear_penalty=r.number(spec, p, "shear_penalty", positive=True),
-                      friction=law)
+def _joint_sets(r, c, p) -> list:
+    """The ``joint_sets`` of a ``[[cut]]`` table."""
+    from dda.cutting import JointSet
 
+    if not isinstance(c.get("joint_sets"), list):
+        raise r.error(p, "needs 'joint_sets', a list of tables {dip, spacing, ...}")
+    sets = []
+    for j, js in enumerate(c["joint_sets"]):
+        q = (*p, "joint_sets", j)
+        r.table(js, q, {"dip", "spacing", "offset", "persistence", "trace_length"})
+        sets.append(r.call(q, JointSet, **js))
+    return sets
+
+
+def _block_of(r, blocks, spec, p, key="block"):
+    """The block a table names under ``key``."""
+    if key not in spec:
+        raise r.error(p, f"needs '{key}'")
+    name = spec[key]
+    if name not in blocks:
+        raise r.error((*p, key), f"no block {name!r}")
+    return blocks[name]
+
+
+def _read_joints(r, data, blocks, set_joint, folder):
+    """``[joints.default]`` and ``[[joints.pair]]``, each given to ``set_joint`` (a law's
+    module named by import path is looked for in ``folder`` first)."""
     joints = r.table(data.get("joints", {}), ("joints",), {"default", "pair"})
     if "default" in joints:
-        scene.set_joint(joint(joints["default"], ("joints", "default")))
+        set_joint(_joint(r, joints["default"], ("joints", "default"), folder))
     for i, jp in enumerate(_array(r, joints, "pair", ("joints", "pair"))):
         p = ("joints", "pair", i)
         if not isinstance(jp.get("between"), list) or len(jp["between"]) != 2:
@@ -478,37 +554,87 @@ def load_scene(path) -> LoadedScene:
             if name not in blocks:
                 raise r.error((*p, "between"), f"no block {name!r}")
         a, b = (blocks[name] for name in jp["between"])
-        r.call(p, scene.set_joint, joint(jp, p, extra=("between",)), between=(a, b))
+        r.call(p, set_joint, _joint(r, jp, p, folder, extra=("between",)), between=(a, b))
 
-    base = path.parent
+
+def _joint(r, spec, p, folder, extra=()):
+    """The :class:`dda.contact.JointMaterial` of a joint table."""
+    from dda.contact import JointMaterial
+
+    r.table(spec, p, {"normal_penalty", "shear_penalty", "friction", *extra})
+    law = _read_friction(r, spec.get("friction"), (*p, "friction"), folder)
+    return r.call(p, JointMaterial,
+                  normal_penalty=r.number(spec, p, "normal_penalty", positive=True),
+                  shear_penalty=r.number(spec, p, "shear_penalty", positive=True),
+                  friction=law)
+
+
+def _read_friction(r, fr, p, folder):
+    """The friction law of a joint's ``friction`` table (``p`` is its path): a name of
+    :func:`dda.registry.law_names` or an import path ``"module:Class"`` (its module looked for
+    in ``folder`` first), with the law's keyword arguments beside it."""
+    names = registry.law_names()
+    law = fr.get("law") if isinstance(fr, dict) else None
+    if not isinstance(law, str) or (law not in names and ":" not in law):
+        raise r.error(p, "must be a table with law = "
+                      f"{' or '.join(repr(k) for k in names)}, or an import path "
+                      "'module:Class'")
+    try:
+        cls = registry.law_class(law, folder=folder)
+    except registry.RegistryError as exc:
+        raise r.error(p, str(exc)) from None
+    args = {k: v for k, v in fr.items() if k != "law"}
+    for k in registry.unknown_keywords(cls, args):
+        known = ", ".join(sorted(registry.parameters(cls))) or "none"
+        raise r.error(p, f"unknown key '{k}' for law {law!r} (known: {known})")
+    if law in names:
+        return r.call(p, cls, **args)
+    try:  # a class of the user's: whatever it raises gets the file's line
+        return cls(**args)
+    except Exception as exc:
+        raise r.error(p, f"law {law!r} raised {type(exc).__name__}: {exc}") from None
+
+
+def _read_shaking(r, data, blocks, shake, folder) -> list:
+    """``[[shake]]``, each given to ``shake`` (a CSV file relative to ``folder``); the
+    effects."""
+    effects = []
     for i, s in enumerate(_array(r, data, "shake")):
         p = ("shake", i)
         r.table(s, p, {"block", "sine", "times", "values", "file"})
-        h = block_of(s, p)
+        h = _block_of(r, blocks, s, p)
         given = [k for k in ("sine", "times", "file") if k in s]
         if len(given) != 1:
             raise r.error(p, "give one of sine = {...}, times + values, or file")
         if "sine" in s:
-            q = (*p, "sine")
-            sine = r.table(s["sine"], q, {"amplitude", "frequency", "start", "direction"})
-            acc = SineAcceleration(r.number(sine, q, "amplitude"),
-                                   r.number(sine, q, "frequency", positive=True),
-                                   r.number(sine, q, "start", default=0.0),
-                                   r.pair(sine, q, "direction", (1.0, 0.0)))
-            r.call(p, scene.shake, h, acceleration=acc)
+            r.call(p, shake, h, acceleration=_sine(r, s["sine"], (*p, "sine")))
         elif "times" in s:
             if "values" not in s:
                 raise r.error(p, "times needs values")
-            r.call(p, scene.shake, h, acceleration=s["values"], times=s["times"])
+            r.call(p, shake, h, acceleration=s["values"], times=s["times"])
         else:
-            t, a = _read_record(r, (*p, "file"), base / s["file"])
-            r.call(p, scene.shake, h, acceleration=a, times=t)
+            t, a = _read_record(r, (*p, "file"), folder / s["file"])
+            r.call(p, shake, h, acceleration=a, times=t)
         effects.append(f"shaking of {h}")
+    return effects
 
+
+def _sine(r, spec, q) -> SineAcceleration:
+    """The ``sine = {...}`` of a ``[[shake]]`` table (``q`` is its path)."""
+    sine = r.table(spec, q, {"amplitude", "frequency", "start", "direction"})
+    return SineAcceleration(r.number(sine, q, "amplitude"),
+                            r.number(sine, q, "frequency", positive=True),
+                            r.number(sine, q, "start", default=0.0),
+                            r.pair(sine, q, "direction", (1.0, 0.0)))
+
+
+def _read_motions(r, data, blocks, prescribe_motion) -> list:
+    """``[[prescribe]]``, each given to ``prescribe_motion``; the effects."""
+    effects = []
     for i, m in enumerate(_array(r, data, "prescribe")):
         p = ("prescribe", i)
         r.table(m, p, {"block", "velocity", "displacement", "penalty", "points"})
-        h = block_of(m, p)
+        h = _block_of(r, blocks, m, p)
         if ("velocity" in m) == ("displacement" in m):
             raise r.error(p, "give one of velocity = {x, y} or displacement = {times, x, y}")
         if "velocity" in m:
@@ -524,13 +650,18 @@ def load_scene(path) -> LoadedScene:
             kwargs["penalty"] = r.number(m, p, "penalty", positive=True)
         if "points" in m:
             kwargs["points"] = r.points(m, p, "points")
-        r.call(p, scene.prescribe_motion, h, motion, **kwargs)
+        r.call(p, prescribe_motion, h, motion, **kwargs)
         effects.append(f"prescribed motion of {h}")
+    return effects
 
+
+def _read_loads(r, data, blocks, add_point_load) -> list:
+    """``[[load]]``, each given to ``add_point_load``; the effects."""
+    effects = []
     for i, ld in enumerate(_array(r, data, "load")):
         p = ("load", i)
         r.table(ld, p, {"block", "point", "force"})
-        h = block_of(ld, p)
+        h = _block_of(r, blocks, ld, p)
         if "point" not in ld or "force" not in ld:
             raise r.error(p, "needs point and force")
         if isinstance(ld["force"], dict):
@@ -538,9 +669,13 @@ def load_scene(path) -> LoadedScene:
                                 both=True)
         else:
             force = r.pair(ld, p, "force", None)
-        r.call(p, scene.add_point_load, h, r.pair(ld, p, "point", None), force)
+        r.call(p, add_point_load, h, r.pair(ld, p, "point", None), force)
         effects.append(f"point load on {h}")
+    return effects
 
+
+def _read_damping(r, data, blocks, set_damping):
+    """``[[damping]]`` (or one ``[damping]`` table), each given to ``set_damping``."""
     damping = data.get("damping", [])
     for i, dm in enumerate([damping] if isinstance(damping, dict) else
                            _array(r, data, "damping")):
@@ -553,49 +688,69 @@ def load_scene(path) -> LoadedScene:
             for name in names:
                 if name not in blocks:
                     raise r.error((*p, "blocks"), f"no block {name!r}")
-        r.call(p, scene.set_damping, mass=r.number(dm, p, "mass", default=0.0),
+        r.call(p, set_damping, mass=r.number(dm, p, "mass", default=0.0),
                stiffness=r.number(dm, p, "stiffness", default=0.0),
                blocks=None if names is None else [blocks[n] for n in names])
-    if scene.damping_coefficients() is not None:
-        effects.append("damping")
 
+
+def _read_simulation(r, data, settings):
+    """``[simulation]``: the solver, the :class:`dda.Simulation` keyword arguments (the keys
+    ``settings`` that are given; dt always) and the duration (None when left out)."""
     p = ("simulation",)
-    sim = r.table(data.get("simulation", {}), p, {
-        "dt", "duration", "solver", "tol", "max_iter", "analysis", "velocity_carry",
-        "max_open_close", "record_every", "max_displacement_ratio", "penetration_tolerance"})
-    solver_name = sim.get("solver", "newton")
-    if solver_name == "newton":
-        kw = {k: sim[k] for k in ("tol", "max_iter") if k in sim}
-        solver = r.call(p, NewtonRaphson, **kw)
-    elif solver_name == "legacy":
-        if "tol" in sim or "max_iter" in sim:
-            raise r.error(p, "tol and max_iter are Newton's settings (solver = \"newton\")")
-        solver = LegacyPullBack()
-    else:
-        raise r.error((*p, "solver"), f"must be 'newton' or 'legacy', got {solver_name!r}")
-    settings = {"dt": r.number(sim, p, "dt", positive=True)}
-    for k in ("analysis", "velocity_carry", "max_open_close", "record_every",
-              "max_displacement_ratio", "penetration_tolerance"):
-        if k in sim:
-            settings[k] = sim[k]
+    solver_keys = _solver_keys(settings)
+    sim = r.table(data.get("simulation", {}), p, {*settings, "duration", "solver",
+                                                   *solver_keys})
+    solver = _read_solver(r, sim, p, solver_keys)
+    kwargs = {"dt": r.number(sim, p, "dt", positive=True)}
+    for k in settings:
+        if k != "dt" and k in sim:
+            kwargs[k] = sim[k]
     duration = r.number(sim, p, "duration", positive=True) if "duration" in sim else None
+    return solver, kwargs, duration
 
-    out = r.table(data.get("output", {}), ("output",), {"dir", "prefix", "every", "checkpoint",
-                                                        "checkpoint_every"})
-    out_dir = base / out["dir"] if "dir" in out else None
-    prefix = str(out.get("prefix", path.stem))
-    every = _count(r, out, ("output",), "every", 1)
+
+def _solver_keys(settings) -> list:
+    """The keys of ``[simulation]`` that set a registered solver (tol, max_iter, ...)."""
+    keys = {}
+    for name in registry.solver_names():
+        for k in registry.parameters(registry.solver_class(name)):
+            keys.setdefault(k)
+    return [k for k in keys if k not in settings and k not in ("duration", "solver")]
+
+
+def _read_solver(r, sim, p, solver_keys):
+    """The solver of the ``[simulation]`` table ``sim``: a name of
+    :func:`dda.registry.solver_names` (default "newton") with its settings beside it."""
+    names = registry.solver_names()
+    name = sim.get("solver", "newton")
+    if not isinstance(name, str) or name not in names:
+        shown = " or ".join(repr(n) for n in ("newton", *(n for n in names if n != "newton")))
+        raise r.error((*p, "solver"), f"must be {shown}, got {name!r}")
+    cls = registry.solver_class(name)
+    wrong = [k for k in registry.unknown_keywords(cls, sim) if k in solver_keys]
+    if wrong:
+        takes = ", ".join(registry.parameters(cls)) or "none"
+        what = "is not a setting" if len(wrong) == 1 else "are not settings"
+        raise r.error(p, f"{' and '.join(wrong)} {what} of solver = {name!r} (it takes: "
+                      f"{takes})")
+    return r.call(p, cls, **{k: sim[k] for k in solver_keys if k in sim})
+
+
+def _read_output(r, data, path, keys) -> dict:
+    """``[output]``: the :class:`LoadedScene` fields of the output files and checkpoint."""
+    out = r.table(data.get("output", {}), ("output",), keys)
+    fields = {"output_dir": path.parent / out["dir"] if "dir" in out else None,
+              "prefix": str(out.get("prefix", path.stem)),
+              "every": _count(r, out, ("output",), "every", 1)}
     checkpoint = out.get("checkpoint")
     if checkpoint is not None and (not isinstance(checkpoint, str) or not checkpoint):
         raise r.error(("output", "checkpoint"), f"must be a file name, got {checkpoint!r}")
-    loaded = LoadedScene(scene, blocks, solver, settings, duration, out_dir, prefix, every,
-                         path, effects, checkpoint,
-                         _count(r, out, ("output",), "checkpoint_every", 100))
-    # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
-    r.call(p, loaded.simulation)
-    return loaded
+    fields["checkpoint"] = checkpoint
+    fields["checkpoint_every"] = _count(r, out, ("output",), "checkpoint_every", 100)
+    return fields
 
 
+# ---------------------------------------------------------------------- helpers
 def _array(r, data, key, path=None):
     path = path or (key,)
     value = data.get(key, [])

@@ -41,29 +41,30 @@ from pathlib import Path
 
 import numpy as np
 
+from dda import registry
 from dda.profiling import SECTIONS
 from dda.simulation import Simulation, SimulationError
 
+# SOLVERS comes from the module's __getattr__ (the registry's solver names)
 __all__ = ["Study", "Case", "grid", "run_case", "sweep", "write_csv", "markdown_table",
-           "pareto_front", "cheapest", "SOLVERS"]
+           "pareto_front", "cheapest",
+           "SOLVERS"]  # noqa: F822
 
 
-def _solvers():
-    from dda.solvers import LegacyPullBack, NewtonRaphson
+def make_solver(name: str, **settings):
+    """The solver called ``name`` with ``settings`` (default: its default settings).
 
-    return {"legacy": LegacyPullBack, "newton": NewtonRaphson}
+    ``name`` is one of :func:`dda.registry.solver_names` ("legacy", "newton" and any
+    registered with :func:`dda.registry.register_solver`) or an import path "module:Class".
+    """
+    return registry.make_solver(name, **settings)
 
 
-#: solver names a study's ``solver`` setting may take
-SOLVERS = ("legacy", "newton")
-
-
-def make_solver(name: str):
-    """The solver called ``name`` ("legacy" or "newton") with its default settings."""
-    try:
-        return _solvers()[name]()
-    except KeyError:
-        raise ValueError(f"unknown solver {name!r}; use one of {', '.join(SOLVERS)}") from None
+def __getattr__(name):
+    # SOLVERS follows the registry, solvers registered after this import included
+    if name == "SOLVERS":
+        return registry.solver_names()
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class Study(ABC):
