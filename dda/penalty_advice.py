@@ -168,7 +168,7 @@ class PenaltyAdvisor:
         message = soft_penalty_advice(depth, half, pn, names)
         if message:
             self.warned.add("soft")
-            warnings.warn(message, PenaltyWarning, stacklevel=5)
+            warnings.warn(message, PenaltyWarning, stacklevel=6)
 
     def _check_stiff(self, steps, contact_cuts):
         model = self.model
@@ -179,4 +179,4 @@ class PenaltyAdvisor:
                                        float(mass[light]), self.dt, model.block_label(light))
         if message:
             self.warned.add("stiff")
-            warnings.warn(message, PenaltyWarning, stacklevel=5)
+            warnings.warn(message, PenaltyWarning, stacklevel=6)

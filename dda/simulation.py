@@ -9,9 +9,7 @@ watch the committed states; checkpoints (:mod:`dda.io.checkpoint`) keep them.
 
 from __future__ import annotations
 
-import signal
 import sys
-import threading
 import time as _time
 from pathlib import Path
 
@@ -33,6 +31,7 @@ from dda.progress import ProgressBar
 from dda.recorder import Recorder, frame
 from dda.result import Frame, Result
 from dda.scene import Scene
+from dda.signals import sigterm_as_interrupt
 from dda.solvers.base import NonlinearSolver
 from dda.solvers.newton import NewtonRaphson
 from dda.step import StepSettings, StepState, step
@@ -155,7 +154,7 @@ class Simulation:
         return frame(self.model, self.committed)
 
     def run(self, duration: float | None = None, output=None, progress: bool | None = None,
-            checkpoint=None, checkpoint_every: int = 100) -> Result:
+            checkpoint=None, checkpoint_every: int = 100, callback=None) -> Result:
         """Run the simulation for ``duration`` seconds from where it stands.
 
         Parameters
@@ -176,6 +175,10 @@ class Simulation:
             file it came from unless given another.
         checkpoint_every : int
             Steps between checkpoints.
+        callback : callable, optional
+            Called as ``callback(state, report)`` after every committed step with the
+            :class:`dda.step.StepState` and its :class:`dda.step.StepReport` (live plots, own
+            logs; an exception it raises ends the run, the steps done written).
 
         Returns
         -------
@@ -196,22 +199,14 @@ class Simulation:
         if progress is None:
             progress = n_steps > 2000 and sys.stderr.isatty()
         bar = ProgressBar(t_end, self.committed.time) if progress else None
+        watchers = [w for w in (bar, callback) if w is not None]
         result = Result(self.scene, [b.name for b in self.scene.blocks])
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)
         settings = self.settings
-        previous_term = _raise_on_sigterm()
         try:
-            while self.committed.time < t_end - 1e-12 * max(1.0, t_end):
-                self._advance(result, t_end, settings)
-                last = self.committed.time >= t_end - 1e-12 * max(1.0, t_end)
-                recorder.committed(self.committed, last)
-                self._written = recorder.written
-                if checkpoint is not None and (self.control.steps % checkpoint[1] == 0
-                                               or last):
-                    self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
-                if bar:
-                    bar(self.committed)
+            with sigterm_as_interrupt():
+                self._steps(result, t_end, settings, recorder, writer, checkpoint, watchers)
         except SimulationError as exc:
             exc.result = result
             raise
@@ -220,13 +215,23 @@ class Simulation:
                 self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
             raise
         finally:
-            if previous_term is not None:
-                signal.signal(signal.SIGTERM, previous_term[0])
             if bar:
                 bar.close()
             if writer is not None:
                 writer.close()
         return result
+
+    def _steps(self, result, t_end, settings, recorder, writer, checkpoint, watchers):
+        """Step to ``t_end``: commit, record, checkpoint and tell the watchers each step."""
+        while self.committed.time < t_end - 1e-12 * max(1.0, t_end):
+            report = self._advance(result, t_end, settings)
+            last = self.committed.time >= t_end - 1e-12 * max(1.0, t_end)
+            recorder.committed(self.committed, last)
+            self._written = recorder.written
+            if checkpoint is not None and (self.control.steps % checkpoint[1] == 0 or last):
+                self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
+            for watch in watchers:
+                watch(self.committed, report)
 
     def _prepare(self, duration, output, checkpoint, every):
         """The run's end time, writer and ``(checkpoint path, every)`` (or None), checked."""
@@ -292,6 +297,7 @@ class Simulation:
             residual_norms=report.residual_norms,
             **{f"{name}_time": sec for name, sec in profile.seconds.items()},
         )
+        return report
 
     def _check_can_go_on(self, report, tries, dt):
         """Stop the run when cutting dt further cannot help."""
@@ -335,16 +341,3 @@ class Simulation:
         sim._resume_checkpoint = data["checkpoint"]
         return sim
 
-
-def _raise_on_sigterm():
-    """Turn SIGTERM into KeyboardInterrupt for the run (main thread only).
-
-    Returns ``(old handler,)`` to restore, or None off the main thread.
-    """
-    if threading.current_thread() is not threading.main_thread():
-        return None
-
-    def interrupt(signum, frame):
-        raise KeyboardInterrupt(f"signal {signum}")
-
-    return (signal.signal(signal.SIGTERM, interrupt),)

@@ -18,7 +18,7 @@ search, stop).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -31,7 +31,7 @@ from dda.contact.detection import (
     narrow_phase,
 )
 from dda.contact.element import ContactElement, LawGroups
-from dda.contact.penetration import penetration_guard
+from dda.contact.penetration import GuardReport, penetration_guard
 from dda.errors import SimulationError
 from dda.model import Model
 from dda.profiling import section
@@ -120,9 +120,14 @@ class StepReport:
     untracked: float = 0.0  # the deepest untracked penetration, in penetration tolerances
 
     @classmethod
-    def of(cls, sol: StepSolution, unknowns: int, pairs: int) -> StepReport:
-        return cls(sol.converged, sol.reason, sol.iterations, sol.open_close_passes,
-                   list(sol.residual_norms), unknowns=unknowns, pairs=pairs)
+    def of(cls, sol: StepSolution, unknowns: int, pairs: int, reason: str = "",
+           search_hint: float = 0.0, guard=None) -> StepReport:
+        """The report of a step the solver answered with ``sol``; a ``reason`` refuses it
+        even when the solver converged."""
+        guard = guard or GuardReport()
+        return cls(sol.converged and not reason, reason or sol.reason, sol.iterations,
+                   sol.open_close_passes, list(sol.residual_norms), search_hint, unknowns,
+                   pairs, guard.deepest, guard.spring_deepest, guard.untracked)
 
 
 @dataclass(frozen=True)
@@ -164,28 +169,26 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
                           d_known=d_known, element=element,
                           max_open_close=settings.max_open_close, rigid=model.rigid)
     sol = solver.solve_step(problem)
-    report = StepReport.of(sol, problem.pattern.unknowns, found.n_pairs)
+    costs = (problem.pattern.unknowns, found.n_pairs)
     if not sol.converged:
-        return None, report
+        return None, StepReport.of(sol, *costs)
     move = geometry.vertex_displacements(state.x, ints.centroid[model.topo.block],
                                          sol.d[model.topo.block])
     refused = _check_moves(model, move, d0, settings.max_displacement_ratio)
     if refused is not None:
-        return None, replace(report, converged=False, reason=refused[0],
-                             search_hint=refused[1])
+        return None, StepReport.of(sol, *costs, reason=refused[0], search_hint=refused[1])
     x_new = state.x + move
     with section("guard"):
         # no vertex moved farther than d0 (checked above), so the pairs whose boxes
         # overlap at the end of the step are among the detection's, grown by d0
         guard = penetration_guard(model, x_new, sol.contacts, element.normal_penalty,
                                   found.pairs, settings.penetration_tolerance)
-    report = replace(report, penetration=guard.deepest,
-                     spring_penetration=guard.spring_deepest, untracked=guard.untracked)
+    report = StepReport.of(sol, *costs, reason=guard.reason, guard=guard)
     if guard.reason:
-        return None, replace(report, converged=False, reason=guard.reason)
+        return None, report
     trial = _advanced(model, state, dt, sol, ints.centroid, x_new, move, v_eff,
-                      (known_u, known_v, d_known, shaking))
-    return replace(trial, untracked=guard.untracked, penetration=guard.deepest), report
+                      (known_u, known_v, d_known, shaking), guard)
+    return trial, report
 
 
 def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0) -> float:
@@ -291,7 +294,8 @@ def _check_moves(model, move, d0, max_ratio):
     return None
 
 
-def _advanced(model, state, dt, sol, centroid, x_new, move, v_eff, known) -> StepState:
+def _advanced(model, state, dt, sol, centroid, x_new, move, v_eff, known,
+              guard) -> StepState:
     """The trial state at the end of an accepted step (Newmark update, METHOD.md s. 2)."""
     known_u, known_v, d_known, shaking = known
     d = sol.d
@@ -319,4 +323,5 @@ def _advanced(model, state, dt, sol, centroid, x_new, move, v_eff, known) -> Ste
         centroid=centroid + d[:, :2], contacts=sol.contacts, load_points=load_points,
         spring_points=spring_points, known_u=known_u, shaking=shaking,
         last_move=float(np.max(np.hypot(move[:, 0], move[:, 1]))),
+        untracked=guard.untracked, penetration=guard.deepest,
     )

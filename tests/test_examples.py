@@ -74,3 +74,22 @@ def test_jointed_slope_example(tmp_path, capsys):
     assert "blocks cut from the slope" in capsys.readouterr().out
     assert (tmp_path / "slope.pvd").exists()
     assert np.all(np.isfinite(moved)) and moved.max() < 0.05
+
+
+def test_user_friction_law(capsys):
+    """docs/friction_laws.md's example at its default length: the user's law passes the check,
+    both laws under both solvers land within 1% of the rigid-block formula, and the scene file
+    that names the law by import path gives the Newton run's numbers (its coordinates are the
+    Python scene's to 10 decimals)."""
+    example = load("user_friction_law")
+    runs = example.main([])
+    out = capsys.readouterr().out
+    assert "check_friction_law(BrittleCohesion(phi=30.0, cohesion=5000.0)): passed" in out
+    assert len(runs) == 5
+    for (name, _), (t, slide) in runs.items():
+        expected = example.slide_formula(name, np.asarray(t))[-1]
+        assert slide[-1] == pytest.approx(expected, rel=0.01)
+    # the cohesion matters: the brittle block slides 24 times as far as the cohesive one
+    assert runs[("brittle", "newton")][1][-1] > 20 * runs[("coulomb", "newton")][1][-1]
+    np.testing.assert_allclose(runs[("brittle", "scene file")][1],
+                               runs[("brittle", "newton")][1], rtol=1e-6, atol=1e-9)

@@ -132,13 +132,13 @@ def test_the_guard_stops_a_run_whose_detection_misses_a_contact(monkeypatch, tmp
     """With a contact detector that finds nothing the brick would fall through the floor;
     the guard refuses the step, cuts it, and stops the run with the blocks, vertex, depth and
     time, the steps before kept and written."""
-    import dda.simulation as simulation
+    import dda.step as step
     from dda.contact.detection import CandidateContacts
 
     def blind(x, topo, d0, limit, pairs=None, sunk_depth=None):
         return CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
 
-    monkeypatch.setattr(simulation, "narrow_phase", blind)
+    monkeypatch.setattr(step, "narrow_phase", blind)
     sim = dda.Simulation(drop_scene(), dt=1e-3)
     writer = dda.io.VTUWriter(tmp_path / "drop")
     with pytest.raises(dda.SimulationError) as info:

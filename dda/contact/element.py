@@ -93,7 +93,7 @@ class LawGroups:
                 trial = law.return_map(*args)
             t_s[idx] = trial.t_s
             slipping[idx] = trial.slipping
-            for k, v in law.commit(trial).items():
+            for k, v in law.trial_history(trial).items():
                 trial_history[k][idx] = v
             if normal_penalty is not None:
                 dts_dgs[idx], dts_dgn[idx] = law.tangent(trial, normal_penalty[idx],
@@ -118,7 +118,7 @@ class LawGroups:
                 trial = law.stick(self._select(history, law, idx), delta_g_s[idx],
                                   shear_penalty[idx])
                 t_s[idx] = trial.t_s
-                for k, v in law.commit(trial).items():
+                for k, v in law.trial_history(trial).items():
                     out[k][idx] = v
             return t_s, out
 

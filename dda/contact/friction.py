@@ -113,9 +113,14 @@ class FrictionLaw(ABC):
         return FrictionTrial(t_s=t_s, slipping=np.zeros(len(t_s), dtype=bool),
                              strength=np.full(len(t_s), np.inf), state=state)
 
-    def commit(self, trial: FrictionTrial) -> dict[str, np.ndarray]:
-        """The history to carry into the next step once the step has converged."""
+    def trial_history(self, trial: FrictionTrial) -> dict[str, np.ndarray]:
+        """The history a trial leaves: what the contact carries into the next step if the
+        step that made the trial is accepted (the element asks for it on every trial)."""
         return trial.state
+
+    def commit(self, trial: FrictionTrial) -> dict[str, np.ndarray]:
+        """Old name of :meth:`trial_history` (it commits nothing), kept for scripts."""
+        return self.trial_history(trial)
 
 
 class CoulombLike(FrictionLaw):

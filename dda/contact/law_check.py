@@ -64,9 +64,9 @@ def check_friction_law(law, *, normal_forces=(1e2, 1e6), normal_penalty: float =
     fresh = law.initial_state(n)
     # a used history: one step of random shear from the fresh state, committed
     first = law.return_map(fresh, rng.uniform(-3, 3, n) * -t_n / ps, t_n, ps, length)
-    used = {k: np.asarray(v, dtype=float).copy() for k, v in law.commit(first).items()}
+    used = {k: np.asarray(v, dtype=float).copy() for k, v in law.trial_history(first).items()}
     _assert(set(used) == set(fields),
-            f"{law!r}: commit() gives the fields {sorted(used)}, history_fields() "
+            f"{law!r}: trial_history() gives the fields {sorted(used)}, history_fields() "
             f"{sorted(fields)}")
     counts = np.zeros(2, dtype=int)  # tangent checks made on sticking and slipping contacts
     for committed in (fresh, used):
@@ -109,7 +109,7 @@ def _check_trial(law, committed, dgs, t_n, ps, pn, length, fields):
     trial = law.return_map(committed, dgs, t_n, ps, length)
     law.tangent(trial, pn, ps)
     law.stick(committed, dgs, ps)
-    law.commit(trial)
+    law.trial_history(trial)
     for name, a, b in zip(("committed history", "delta_g_s", "t_n", "shear_penalty",
                            "length"), before, inputs, strict=True):
         same = (all(np.array_equal(a[k], b[k]) for k in a) and set(a) == set(b)
@@ -123,7 +123,7 @@ def _check_trial(law, committed, dgs, t_n, ps, pn, length, fields):
         _assert(value.shape == (n,), f"{law!r}: trial.{name} has shape {value.shape}, "
                                      f"expected ({n},): one value per contact")
     _assert(np.all(np.isfinite(trial.t_s)), f"{law!r}: non-finite shear force in a trial")
-    state = law.commit(trial)
+    state = law.trial_history(trial)
     _assert(set(state) == set(fields), f"{law!r}: a committed trial has the fields "
                                        f"{sorted(state)}, history_fields() {sorted(fields)}")
     return trial
@@ -131,7 +131,7 @@ def _check_trial(law, committed, dgs, t_n, ps, pn, length, fields):
 
 def _check_vectorized(law, committed, dgs, t_n, ps, length, trial):
     """Each contact's result is the same evaluated alone as among all the others."""
-    state = law.commit(trial)
+    state = law.trial_history(trial)
     for i in range(0, len(dgs), max(1, len(dgs) // 8)):
         s = slice(i, i + 1)
         one = law.return_map({k: v[s] for k, v in committed.items()}, dgs[s], t_n[s], ps[s],
@@ -139,7 +139,7 @@ def _check_vectorized(law, committed, dgs, t_n, ps, length, trial):
         close = (np.allclose(one.t_s, trial.t_s[s], rtol=1e-12, atol=0.0)
                  and np.array_equal(one.slipping, trial.slipping[s])
                  and all(np.allclose(v, state[k][s], rtol=1e-12, atol=1e-300)
-                         for k, v in law.commit(one).items()))
+                         for k, v in law.trial_history(one).items()))
         _assert(close, f"{law!r}: contact {i} evaluated alone differs from the same contact "
                        "evaluated with the others (the law must be vectorized element-wise)")
 
@@ -147,7 +147,7 @@ def _check_vectorized(law, committed, dgs, t_n, ps, length, trial):
 def _check_stick(law, committed, dgs, t_n, ps, length, trial, fields):
     """On a sticking trial the stick branch gives the return map's force."""
     stick = law.stick(committed, dgs, ps)
-    _assert(set(law.commit(stick)) == set(fields),
+    _assert(set(law.trial_history(stick)) == set(fields),
             f"{law!r}: stick() gives the fields {sorted(stick.state)}, history_fields() "
             f"{sorted(fields)}")
     held = ~np.asarray(trial.slipping)
