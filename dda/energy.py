@@ -59,6 +59,8 @@ def energy(sim, state=None) -> Energy:
     (5000.0, 4500.0)
     """
     model = getattr(sim, "model", sim)
+    if state is None and not hasattr(sim, "committed"):
+        raise TypeError("energy(model, state): give the state to measure with a Model")
     st = sim.committed if state is None else state
     ints = geometry.polygon_integrals(st.x, model.offsets)
     mass = geometry.mass_matrices(ints, model.density)

@@ -21,8 +21,9 @@ A class of your own is used in two ways:
 - An import path ``"module:Class"`` (``"my_laws:BrittleCohesion"``,
   ``"pkg.laws:Outer.Inner"``) names it without registering: the module is imported with
   :func:`importlib.import_module` and the attributes after the colon are looked up one by one
-  (nothing is evaluated). :func:`law_class` and :func:`solver_class` take an optional folder
-  searched before ``sys.path`` (a scene file's folder).
+  (no expression is evaluated; importing the module runs its code, as any import does).
+  :func:`law_class` and :func:`solver_class` take an optional folder searched before
+  ``sys.path`` (a scene file's folder).
 
 Examples
 --------
@@ -174,6 +175,11 @@ def import_class(spec: str, folder=None):
 
 
 def _import(module: str, folder):
+    with _lock:  # sys.path is changed while importing: one import at a time
+        return _import_locked(module, folder)
+
+
+def _import_locked(module: str, folder):
     entry = None if folder is None else str(Path(folder).resolve())
     if entry is not None:
         sys.path.insert(0, entry)

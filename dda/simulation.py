@@ -63,8 +63,9 @@ class Simulation:
         Largest distance a free block's vertex may move in one step, as a fraction of the
         block's size (the square root of its area). A step that moves a block farther is
         cut, as is one whose OPEN-CLOSE iteration does not settle or whose Newton iteration
-        does not converge; dt grows back (doubling) after ``GROW_AFTER`` quiet steps. Every
-        cut is in ``result.stats.cuts`` as (time, dt, reason).
+        does not converge; dt grows back (doubling) after ``control.grow_after`` quiet steps
+        (:class:`dda.step_control.StepControl`). Every cut is in ``result.stats.cuts`` as
+        (time, dt, reason).
     penetration_tolerance : float
         The penetration guard: after every step, before it is committed, every vertex that
         lies inside another block is found geometrically (:mod:`dda.contact.penetration`).
@@ -77,6 +78,15 @@ class Simulation:
         closed spring.
     output : writer, optional
         For example ``dda.io.VTUWriter("out/case")``; can also be given to :meth:`run`.
+
+    Attributes
+    ----------
+    model : dda.model.Model
+        The scene compiled into arrays (built once).
+    committed : dda.step.StepState
+        The committed state (``state`` is the same); :func:`dda.step.step` makes trials of it.
+    control : dda.step_control.StepControl
+        The step size now, cuts and growth.
 
     Examples
     --------
@@ -137,6 +147,10 @@ class Simulation:
         """The committed state (the same as :attr:`committed`)."""
         return self.committed
 
+    @state.setter
+    def state(self, value: StepState) -> None:
+        self.committed = value
+
     @property
     def settings(self) -> StepSettings:
         """How each step is taken, from this simulation's arguments."""
@@ -168,11 +182,9 @@ class Simulation:
             Show a progress bar on stderr; by default on for runs of more than 2,000 steps
             when stderr is a terminal.
         checkpoint : str or Path, optional
-            File to keep the run's state in, written (atomically) every ``checkpoint_every``
-            steps, when the run is interrupted (Ctrl-C, SIGTERM) and at its end;
-            :meth:`resume` goes on from it. The scene must be picklable: its callables
-            module-level functions, not lambdas. A resumed simulation keeps writing to the
-            file it came from unless given another.
+            File kept (:mod:`dda.io.checkpoint`) every ``checkpoint_every`` steps, on Ctrl-C
+            or SIGTERM and at the end, for :meth:`resume`; the scene's callables must be
+            module-level functions. A resumed run keeps its file unless given another.
         checkpoint_every : int
             Steps between checkpoints.
         callback : callable, optional
@@ -189,40 +201,45 @@ class Simulation:
         ------
         SimulationError
             When a step cannot be made to converge even with a much smaller dt; its
-            ``result`` holds the steps done before (and the writer has written them).
-        KeyboardInterrupt
-            On Ctrl-C or SIGTERM, after the steps done are written and checkpointed.
+            ``result`` holds the steps done (written). KeyboardInterrupt on Ctrl-C or SIGTERM,
+            after the steps done are written and checkpointed.
         """
         t_end, writer, checkpoint = self._prepare(duration, output, checkpoint,
                                                   checkpoint_every)
-        n_steps = int(np.ceil((t_end - self.committed.time) / self.dt - 1e-9))
-        if progress is None:
-            progress = n_steps > 2000 and sys.stderr.isatty()
-        bar = ProgressBar(t_end, self.committed.time) if progress else None
-        watchers = [w for w in (bar, callback) if w is not None]
+        bar = self._progress_bar(progress, t_end)
         result = Result(self.scene, [b.name for b in self.scene.blocks])
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)
-        settings = self.settings
-        try:
-            with sigterm_as_interrupt():
-                self._steps(result, t_end, settings, recorder, writer, checkpoint, watchers)
-        except SimulationError as exc:
-            exc.result = result
-            raise
-        except KeyboardInterrupt:
-            if checkpoint is not None:  # the committed state is whole: keep it
-                self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
-            raise
-        finally:
-            if bar:
-                bar.close()
-            if writer is not None:
-                writer.close()
+        watchers = [w for w in (bar, callback) if w is not None]
+        # SIGTERM is Ctrl-C until the writer is closed: a second one during the checkpoint
+        # save must not kill the process before the files are complete
+        with sigterm_as_interrupt():
+            try:
+                self._steps(result, t_end, recorder, writer, checkpoint, watchers)
+            except SimulationError as exc:
+                exc.result = result
+                raise
+            except KeyboardInterrupt:
+                if checkpoint is not None:  # the committed state is whole: keep it
+                    self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
+                raise
+            finally:
+                if bar:
+                    bar.close()
+                if writer is not None:
+                    writer.close()
         return result
 
-    def _steps(self, result, t_end, settings, recorder, writer, checkpoint, watchers):
+    def _progress_bar(self, progress, t_end):
+        """A progress bar when asked for, or by default for a long run on a terminal."""
+        if progress is None:
+            steps = (t_end - self.committed.time) / self.dt
+            progress = steps > 2000 and sys.stderr.isatty()
+        return ProgressBar(t_end, self.committed.time) if progress else None
+
+    def _steps(self, result, t_end, recorder, writer, checkpoint, watchers):
         """Step to ``t_end``: commit, record, checkpoint and tell the watchers each step."""
+        settings = self.settings
         while self.committed.time < t_end - 1e-12 * max(1.0, t_end):
             report = self._advance(result, t_end, settings)
             last = self.committed.time >= t_end - 1e-12 * max(1.0, t_end)
@@ -281,7 +298,7 @@ class Simulation:
                 continue
             result.stats.cuts.append((self.committed.time, dt, report.reason))
             control.cut(dt, report.reason)
-            self._check_can_go_on(report, tries, dt)
+            control.check_can_go_on(report, tries, dt, self.committed)
         self.committed = trial
         control.accepted()
         self.advisor.observe(trial, control.steps, control.contact_cuts)
@@ -298,24 +315,6 @@ class Simulation:
             **{f"{name}_time": sec for name, sec in profile.seconds.items()},
         )
         return report
-
-    def _check_can_go_on(self, report, tries, dt):
-        """Stop the run when cutting dt further cannot help."""
-        time = self.committed.time
-        if report.untracked > 1.0 and self.committed.untracked > 0.5:
-            # the vertex is already half the tolerance in, untracked, at the start of the
-            # step: any step that moves it on is refused, and smaller ones only creep
-            raise SimulationError(
-                f"the run cannot go on at t = {time:.6g} s: {report.reason}; it was already "
-                f"{self.committed.untracked:.2g} tolerances deep, untracked, at the start of "
-                "the step, so a smaller dt cannot help (contact detection missed it: please "
-                "report the scene)"
-            )
-        if tries > self.control.max_cuts:
-            raise SimulationError(
-                f"the run cannot go on at t = {time:.6g} s: {report.reason} "
-                f"(step cut {tries} times down to dt = {dt:.3g} s)"
-            )
 
     # ------------------------------------------------------------------ checkpoints
     def save_checkpoint(self, path, writer=None, end: float | None = None,

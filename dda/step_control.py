@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from dda.errors import SimulationError
 from dda.penalty_advice import contact_cut
 
 __all__ = ["StepControl"]
@@ -71,3 +72,23 @@ class StepControl:
         if self.dt_now < self.dt and self.good_steps >= self.grow_after:
             self.dt_now = min(self.dt, 2.0 * self.dt_now)
             self.good_steps = 0
+
+    def check_can_go_on(self, report, tries: int, dt: float, committed) -> None:
+        """After a cut: raise :class:`dda.SimulationError` when cutting dt further cannot
+        help (``tries`` cuts of this step, the last at ``dt``, from the ``committed``
+        state)."""
+        time = committed.time
+        if report.untracked > 1.0 and committed.untracked > 0.5:
+            # the vertex is already half the tolerance in, untracked, at the start of the
+            # step: any step that moves it on is refused, and smaller ones only creep
+            raise SimulationError(
+                f"the run cannot go on at t = {time:.6g} s: {report.reason}; it was already "
+                f"{committed.untracked:.2g} tolerances deep, untracked, at the start of "
+                "the step, so a smaller dt cannot help (contact detection missed it: please "
+                "report the scene)"
+            )
+        if tries > self.max_cuts:
+            raise SimulationError(
+                f"the run cannot go on at t = {time:.6g} s: {report.reason} "
+                f"(step cut {tries} times down to dt = {dt:.3g} s)"
+            )

@@ -34,11 +34,12 @@ import numpy as np
 
 import dda
 from dda.contact import BartonBandis
+from dda.registry import make_solver
 from dda.studies.cases import SHEAR_BOX_LENGTH, shear_box, shear_stress
 
 JRC, JCS, PHI_R = 10.0, 50e6, 30.0
 SHEAR = 10e-3  # m
-SOLVERS = {"newton": dda.solvers.NewtonRaphson, "legacy": dda.solvers.LegacyPullBack}
+SOLVERS = ("newton", "legacy")  # run in this order; classes from dda.registry
 
 
 def barton_law() -> BartonBandis:
@@ -59,7 +60,7 @@ def shear_test(sigma_n: float, solver: str, steps: int, writer=None) -> dict:
     scene, lower, upper = shear_box(SHEAR, friction=law, normal_stress=sigma_n,
                                     consolidation=1.0 / steps)
     dt = 1.0 / steps
-    sim = dda.Simulation(scene, dt=dt, solver=SOLVERS[solver](), analysis="static")
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver), analysis="static")
     start = time.perf_counter()
     sim.run(dt)  # consolidation under the normal stress alone
     rows = {"displacement": [], "slip": [], "tau": [], "sigma": []}

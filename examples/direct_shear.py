@@ -32,17 +32,18 @@ from pathlib import Path
 import numpy as np
 
 import dda
+from dda.registry import make_solver
 from dda.studies.cases import shear_box, shear_stress
 
 STRENGTH = 1e6 * np.tan(np.radians(30.0))
 SHEAR = 2e-3  # imposed at the loading springs, m
-SOLVERS = {"legacy": dda.solvers.LegacyPullBack, "newton": dda.solvers.NewtonRaphson}
+SOLVERS = ("legacy", "newton")  # run in this order; classes from dda.registry
 
 
 def run(n_steps: int, solver: str, writer=None) -> dict:
     """2 mm of shear in ``n_steps`` steps after one consolidation step (static analysis)."""
     scene, lower, upper = shear_box(SHEAR, consolidation=1.0 / n_steps)
-    sim = dda.Simulation(scene, dt=1.0 / n_steps, solver=SOLVERS[solver](), analysis="static")
+    sim = dda.Simulation(scene, dt=1.0 / n_steps, solver=make_solver(solver), analysis="static")
     start = time.perf_counter()
     result = sim.run(1.0 + 1.0 / n_steps, output=writer)
     tau = shear_stress(result, lower, upper)

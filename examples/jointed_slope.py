@@ -39,6 +39,7 @@ import dda
 from dda.contact import CoulombSingle, JointMaterial
 from dda.geometry import JointSet, cut_blocks
 from dda.materials import LinearElastic
+from dda.registry import make_solver, solver_names
 
 ROCK = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
 JOINT = JointMaterial(normal_penalty=5e10, shear_penalty=5e10, friction=CoulombSingle(phi=35.0))
@@ -88,14 +89,13 @@ def main(argv=None):
     ap.add_argument("--out", default="out/jointed_slope", help="output folder")
     ap.add_argument("--duration", type=float, default=0.3, help="simulated time, s")
     ap.add_argument("--dt", type=float, default=2e-3, help="time step, s")
-    ap.add_argument("--solver", choices=["legacy", "newton"], default="legacy")
+    ap.add_argument("--solver", choices=solver_names(), default="legacy")
     args = ap.parse_args(argv)
     out = Path(args.out)
     scene, base, blocks = build_scene()
     face = face_blocks(scene, blocks)
     print(f"{len(blocks)} blocks cut from the slope ({len(face)} on its face)")
-    solver = dda.solvers.LegacyPullBack() if args.solver == "legacy" else \
-        dda.solvers.NewtonRaphson()
+    solver = make_solver(args.solver)
     writer = dda.io.VTUWriter(out / "slope", every=max(1, int(round(0.05 / args.dt))))
     sim = dda.Simulation(scene, dt=args.dt, solver=solver, max_open_close=30)
     result = sim.run(args.duration, output=writer, progress=sys.stderr.isatty())

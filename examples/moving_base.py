@@ -35,13 +35,14 @@ from pathlib import Path
 import numpy as np
 
 import dda
+from dda.registry import make_solver
 from dda.studies.cases import G, moving_base, relative_slip
 from dda.studies.references import sliding_block
 
 PHI, AMPLITUDE, FREQ = 36.4, G, 2.0
 PENALTIES = (2e7, 2e8, 2e9, 2e10)
 STEPS = (1e-3, 1e-2)
-SOLVERS = {"newton": dda.solvers.NewtonRaphson, "legacy": dda.solvers.LegacyPullBack}
+SOLVERS = ("newton", "legacy")  # run in this order; classes from dda.registry
 
 
 def table_acceleration(t):
@@ -56,7 +57,7 @@ def reference(times):
 def run_case(solver: str, dt: float, penalty: float, duration: float, writer=None) -> dict:
     """One DDA run; a run that fails keeps the steps it made and says where it stopped."""
     scene, base, block = moving_base(penalty, PHI, AMPLITUDE, FREQ)
-    sim = dda.Simulation(scene, dt=dt, solver=SOLVERS[solver]())
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver))
     start = time.perf_counter()
     status = "ok"
     try:

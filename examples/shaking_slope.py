@@ -28,6 +28,7 @@ import numpy as np
 
 import dda
 from dda.contact import CoulombSingle
+from dda.registry import make_solver, solver_names
 from dda.studies.cases import SLOPE_DIP, SLOPE_STOP, rock_slope, slide_down_dip, stepped_table
 
 G = 9.81
@@ -102,14 +103,13 @@ def main(argv=None):
     ap.add_argument("--dt", type=float, default=1e-3, help="time step, s")
     ap.add_argument("--phi", type=float, default=31.6, help="joint friction angle, degrees")
     ap.add_argument("--peak", type=float, default=670.0, help="last amplitude step, gal")
-    ap.add_argument("--solver", choices=["newton", "legacy"], default="newton",
+    ap.add_argument("--solver", choices=solver_names(), default="newton",
                     help="fully implicit Newton-Raphson (default) or legacy DDA")
     args = ap.parse_args(argv)
     out = Path(args.out)
     scene, lower, upper = build_scene(args.phi, args.peak)
     writer = dda.io.VTUWriter(out / "slope", every=max(1, int(round(0.02 / args.dt))))
-    solver = dda.solvers.NewtonRaphson() if args.solver == "newton" else \
-        dda.solvers.LegacyPullBack()
+    solver = make_solver(args.solver)
     sim = dda.Simulation(scene, dt=args.dt, solver=solver)
     result = sim.run(args.duration, output=writer, progress=sys.stderr.isatty())
     accel = table_acceleration(args.peak)

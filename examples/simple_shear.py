@@ -33,18 +33,19 @@ import numpy as np
 
 import dda
 from dda.contact import StaticDynamicTransition
+from dda.registry import make_solver
 from dda.studies.cases import shear_box, shear_stress
 
 STATIC = 1e6 * np.tan(np.radians(30.0))
 DYNAMIC = 1e6 * np.tan(np.radians(20.0))
 SHEAR = 0.3e-3
-SOLVERS = {"newton": dda.solvers.NewtonRaphson, "legacy": dda.solvers.LegacyPullBack}
+SOLVERS = ("newton", "legacy")  # run in this order; classes from dda.registry
 
 
 def run(n_steps: int, solver: str, writer=None) -> dict:
     scene, lower, upper = shear_box(SHEAR, friction=StaticDynamicTransition(30.0, 20.0),
                                     poisson=0.0, penalty=100e9, consolidation=1.0 / n_steps)
-    sim = dda.Simulation(scene, dt=1.0 / n_steps, solver=SOLVERS[solver](), analysis="static")
+    sim = dda.Simulation(scene, dt=1.0 / n_steps, solver=make_solver(solver), analysis="static")
     start = time.perf_counter()
     result = sim.run(1.0 + 1.0 / n_steps, output=writer)
     tau = shear_stress(result, lower, upper)

@@ -23,19 +23,19 @@ Run:  python examples/user_friction_law.py
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
 import dda
+from dda import registry
 from dda.contact import CoulombSingle, JointMaterial, check_friction_law
 from dda.materials import LinearElastic
 from dda.solvers import LegacyPullBack, NewtonRaphson
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))  # my_laws.py sits next to this script
-from my_laws import BrittleCohesion  # noqa: E402
+# my_laws.py sits next to this script: the same lookup a scene file's import path makes
+BrittleCohesion = registry.law_class("my_laws:BrittleCohesion", folder=HERE)
 
 G, DIP, PHI, COHESION, V0 = 9.81, np.radians(35.0), np.radians(30.0), 5e3, 0.5
 ROCK = LinearElastic(young=10e9, poisson=0.25, density=2500.0)

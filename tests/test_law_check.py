@@ -88,6 +88,31 @@ def test_each_defect_is_named(kind, message):
     check_friction_law(_Broken("none"))  # the same class without the defect passes
 
 
+class StickKeepsSliding(StaticDynamicTransition):
+    """A law whose stick branch forgets to reset its 'sliding' flag: under legacy DDA it would
+    keep the dynamic angle after sticking again."""
+
+    def elastic_update(self, committed, delta_g_s):
+        return FrictionLaw.elastic_update(self, committed, delta_g_s)
+
+
+class NaNAtZeroPressure(CoulombSingle):
+    def strength_slope(self, t_n, length, history=None):
+        p = np.maximum(-t_n, 0.0)
+        return self.mu * p / p
+
+
+def test_a_stick_branch_that_keeps_a_flag_is_found():
+    with pytest.raises(AssertionError, match="history field 'sliding' after stick"):
+        check_friction_law(StickKeepsSliding(phi_static=30.0, phi_dynamic=20.0))
+
+
+def test_a_law_that_breaks_without_normal_force_is_found():
+    with pytest.raises(AssertionError, match="t_n = 0 gives a non-finite"):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            check_friction_law(NaNAtZeroPressure(phi=30.0))
+
+
 class WrongStick(CoulombSingle):
     def tangent(self, trial, normal_penalty, shear_penalty):
         k_ss, k_sn = super().tangent(trial, normal_penalty, shear_penalty)

@@ -216,8 +216,20 @@ class ContactElement:
         branch (:meth:`dda.contact.FrictionLaw.stick`): legacy DDA's stick spring."""
         return self.laws.stick(history, delta_g_s, self.shear_penalty, where)
 
+    def legacy_trial(self, history, delta_g_s, t_n, state):
+        """Legacy DDA's end of a step: sticking contacts keep their spring (no yield check:
+        the pull-back of the next step cuts any excess), sliding ones are returned to the
+        strength. Returns the shear force and the history (a copy)."""
+        stick, slip = state == STICK, state == SLIP
+        t_stick, history_out = self.stick(history, delta_g_s, where=stick)
+        t_slip, _, slip_history = self.friction(history, delta_g_s, t_n, where=state != OPEN)
+        for key, v in slip_history.items():
+            history_out[key][slip] = v[slip]
+        return np.where(stick, t_stick, 0.0) + np.where(slip, t_slip, 0.0), history_out
+
     def trial_contacts(self, state, t_n, t_s, history) -> ContactSet:
-        """The step's trial contact set; open contacts get their law's initial history."""
+        """The step's trial contact set; open contacts get their law's initial history
+        (written into ``history``, which the set takes over)."""
         self.laws.initial_history(history, state == OPEN)
         c = self.contacts
         return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s, history)

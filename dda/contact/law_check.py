@@ -63,7 +63,7 @@ def check_friction_law(law, *, normal_forces=(1e2, 1e6), normal_penalty: float =
     fields = _check_history_fields(law, n)
     fresh = law.initial_state(n)
     # a used history: one step of random shear from the fresh state, committed
-    first = law.return_map(fresh, rng.uniform(-3, 3, n) * -t_n / ps, t_n, ps, length)
+    first = _return_map(law, fresh, rng.uniform(-3, 3, n) * -t_n / ps, t_n, ps, length)
     used = {k: np.asarray(v, dtype=float).copy() for k, v in law.trial_history(first).items()}
     _assert(set(used) == set(fields),
             f"{law!r}: trial_history() gives the fields {sorted(used)}, history_fields() "
@@ -79,7 +79,30 @@ def check_friction_law(law, *, normal_forces=(1e2, 1e6), normal_penalty: float =
             f"{law!r}: of the sampled trials {counts[0]} stuck and {counts[1]} slipped away "
             "from the yield surface; the tangent must be checked on both branches: give "
             "check_friction_law normal_forces where the law does both")
+    _check_untouched_contacts(law, used, pn, ps, length)
     _check_pickle(law, used, t_n, ps, length)
+
+
+def _check_untouched_contacts(law, committed, pn, ps, length):
+    """Contacts without normal force (just closed, or closed within round-off): finite
+    force, no slip resistance from nothing, and a finite tangent."""
+    n = len(ps)
+    zero = np.zeros(n)
+    for dgs in (zero, np.full(n, 1e-6)):
+        trial = _return_map(law, committed, dgs, zero, ps, length)
+        k_ss, k_sn = law.tangent(trial, pn, ps)
+        _assert(np.all(np.isfinite(trial.t_s)) and np.all(np.isfinite(k_ss))
+                and np.all(np.isfinite(k_sn)),
+                f"{law!r}: a contact with t_n = 0 gives a non-finite shear force or tangent "
+                "(the solvers pass t_n = 0 for contacts that have just closed)")
+
+
+def _return_map(law, committed, dgs, t_n, ps, length):
+    """The law's return map as the contact element calls it (no faces: each contact is its
+    own face, the rule a corner contact follows)."""
+    if law.uses_faces:
+        return law.return_map(committed, dgs, t_n, ps, length, faces=None)
+    return law.return_map(committed, dgs, t_n, ps, length)
 
 
 def _assert(ok, message):
@@ -106,7 +129,7 @@ def _check_trial(law, committed, dgs, t_n, ps, pn, length, fields):
     """A trial of the right shapes that leaves its inputs alone; its tangent too."""
     inputs = (committed, dgs, t_n, ps, length)
     before = copy.deepcopy(inputs)
-    trial = law.return_map(committed, dgs, t_n, ps, length)
+    trial = _return_map(law, committed, dgs, t_n, ps, length)
     law.tangent(trial, pn, ps)
     law.stick(committed, dgs, ps)
     law.trial_history(trial)
@@ -134,7 +157,7 @@ def _check_vectorized(law, committed, dgs, t_n, ps, length, trial):
     state = law.trial_history(trial)
     for i in range(0, len(dgs), max(1, len(dgs) // 8)):
         s = slice(i, i + 1)
-        one = law.return_map({k: v[s] for k, v in committed.items()}, dgs[s], t_n[s], ps[s],
+        one = _return_map(law, {k: v[s] for k, v in committed.items()}, dgs[s], t_n[s], ps[s],
                              length[s])
         close = (np.allclose(one.t_s, trial.t_s[s], rtol=1e-12, atol=0.0)
                  and np.array_equal(one.slipping, trial.slipping[s])
@@ -154,6 +177,13 @@ def _check_stick(law, committed, dgs, t_n, ps, length, trial, fields):
     _assert(np.allclose(stick.t_s[held], trial.t_s[held], rtol=1e-10, atol=0.0),
             f"{law!r}: stick() and return_map() disagree on contacts that stick (legacy DDA "
             "uses stick() for a locked spring)")
+    after_stick, after_trial = law.trial_history(stick), law.trial_history(trial)
+    for k in fields:
+        a, b = np.asarray(after_stick[k])[held], np.asarray(after_trial[k])[held]
+        _assert(np.allclose(a, b, rtol=1e-9, atol=1e-12 * np.max(np.abs(b), initial=1.0)),
+                f"{law!r}: on contacts that stick, the history field {k!r} after stick() "
+                "differs from the one after return_map() (legacy DDA commits stick()'s: a "
+                "flag such as 'sliding' must be reset there too)")
 
 
 def _check_tangent(law, committed, dgs, t_n, pn, ps, length, trial, rtol):
@@ -164,7 +194,7 @@ def _check_tangent(law, committed, dgs, t_n, pn, ps, length, trial, rtol):
     h_n = 1e-6 * np.abs(g_n)
 
     def at(dgs_, g_n_):
-        return law.return_map(committed, dgs_, pn * g_n_, ps, length)
+        return _return_map(law, committed, dgs_, pn * g_n_, ps, length)
 
     plus_s, minus_s = at(dgs + h_s, g_n), at(dgs - h_s, g_n)
     plus_n, minus_n = at(dgs, g_n + h_n), at(dgs, g_n - h_n)
@@ -197,7 +227,7 @@ def _check_pickle(law, committed, t_n, ps, length):
         raise AssertionError(f"{law!r} cannot be pickled ({type(exc).__name__}: {exc}); "
                              "checkpoints and parallel sweeps copy laws by pickling") from None
     dgs = 2.0 * -t_n / ps
-    a = law.return_map(committed, dgs, t_n, ps, length)
-    b = copy_.return_map(committed, dgs, t_n, ps, length)
+    a = _return_map(law, committed, dgs, t_n, ps, length)
+    b = _return_map(copy_, committed, dgs, t_n, ps, length)
     _assert(np.array_equal(a.t_s, b.t_s) and np.array_equal(a.slipping, b.slipping),
             f"{law!r}: a pickled copy of the law gives other forces than the law")

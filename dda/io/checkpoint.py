@@ -49,6 +49,12 @@ def read_checkpoint(path) -> dict:
         raise ValueError(f"Simulation.resume: no checkpoint file {path}")
     try:
         data = pickle.loads(path.read_bytes())
+    except ModuleNotFoundError as exc:
+        raise ValueError(
+            f"Simulation.resume: {path} needs the module {exc.name!r} (a friction law or a "
+            "function of its scene), which Python cannot find from here: run from the folder "
+            "the run was started in (the scene file's, for a law named by import path), or "
+            "put the module's folder on PYTHONPATH") from None
     except Exception as exc:
         raise ValueError(f"Simulation.resume: {path} is not a readable checkpoint "
                          f"({type(exc).__name__}: {exc})") from None

@@ -101,7 +101,8 @@ with its keyword arguments in the same table::
 - ``my_laws`` is looked for first in the scene file's folder (``my_laws.py`` or a package
   ``my_laws/`` beside it; the folder is on ``sys.path`` only while the module is imported),
   then on the normal path. A dotted path after the colon reaches a nested attribute
-  (``"pkg.laws:Outer.Inner"``); nothing is evaluated.
+  (``"pkg.laws:Outer.Inner"``); no expression is evaluated, but importing the module runs
+  its code, as any import does: name only modules you trust.
 - The class must be a subclass of :class:`dda.contact.FrictionLaw`. A module not found, an
   attribute not there, an object of another kind, an unknown key and an error raised by the
   constructor are each a :class:`SceneFileError` naming the line of the friction table.

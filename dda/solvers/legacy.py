@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from dda.contact.contacts import OPEN, SLIP, STICK
+from dda.contact.contacts import OPEN
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.open_close import open_close
 
@@ -39,16 +39,7 @@ class LegacyPullBack(NonlinearSolver):
         if len(el) == 0:
             return StepSolution(oc.d, el.contacts, True, oc.passes, oc.passes)
         state, gap, dgs, history, d = oc.state, oc.gap, oc.dgs, oc.history, oc.d
-        closed = state != OPEN
-        t_n = np.where(closed, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
-        stick = state == STICK
-        slip = state == SLIP
-        # sticking contacts keep their spring (no yield check: the pull-back of the next
-        # step cuts any excess); sliding ones are returned to the strength
-        t_stick, new_history = el.stick(history, dgs, where=stick)
-        t_s_slip, _, slip_history = el.friction(history, dgs, t_n, where=closed)
-        for key, v in slip_history.items():
-            new_history[key][slip] = v[slip]
-        t_s = np.where(stick, t_stick, 0.0) + np.where(slip, t_s_slip, 0.0)
+        t_n = np.where(state != OPEN, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
+        t_s, new_history = el.legacy_trial(history, dgs, t_n, state)
         trial = el.trial_contacts(state, t_n, t_s, new_history)
         return StepSolution(d, trial, True, oc.passes, oc.passes)

@@ -8,10 +8,11 @@ import numpy as np
 import pytest
 
 import dda
+from dda.registry import make_solver
 from tests.stability import scenes
 from tests.stability.watch import KnownMotionWork, Watched, assert_stable, watch
 
-SOLVERS = {"newton": dda.solvers.NewtonRaphson, "legacy": dda.solvers.LegacyPullBack}
+SOLVERS = ("newton", "legacy")  # run in this order; classes from dda.registry
 
 CASES = {
     "penalty 1e3 E, dt 1e-2": scenes.stiff_penalty,
@@ -30,7 +31,7 @@ CASES = {
 
 def run_case(build, solver):
     scene, dt, duration, load = build()
-    sim = dda.Simulation(scene, dt=dt, solver=SOLVERS[solver]())
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver))
     work = None
     if load is not None:
         _, force = load
@@ -80,7 +81,7 @@ def test_a_shaken_cut_slope_gains_no_energy_beyond_the_work_of_the_shaking(solve
     """Energy audit of a jointed rock mass on a shaking table (issue 8, item 2): whatever the
     shaken base and back wall put in, the blocks never hold more than that."""
     scene, dt, duration, _ = scenes.shaken_cut_slope()
-    sim = dda.Simulation(scene, dt=dt, solver=SOLVERS[solver](), max_open_close=30)
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver), max_open_close=30)
     work = KnownMotionWork(sim)
     w = watch(sim, duration, work=work, chunk=1)
     assert w.sim.state.time == pytest.approx(duration)
@@ -119,6 +120,6 @@ def test_the_watch_sees_an_energy_gain_and_a_deep_penetration():
 @pytest.mark.parametrize("solver", sorted(SOLVERS))
 def test_a_pile_of_1000_blocks_settles(solver):
     scene, dt, duration, _ = scenes.pile(1000)
-    sim = dda.Simulation(scene, dt=dt, solver=SOLVERS[solver]())
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver))
     w = watch(sim, duration, chunk=50)
     assert_stable(w)

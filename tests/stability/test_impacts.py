@@ -13,10 +13,11 @@ import warnings
 import pytest
 
 import dda
+from dda.registry import make_solver
 from tests.stability import scenes
 from tests.stability.watch import assert_tracked, watch
 
-SOLVERS = {"newton": dda.solvers.NewtonRaphson, "legacy": dda.solvers.LegacyPullBack}
+SOLVERS = ("newton", "legacy")  # run in this order; classes from dda.registry
 E = scenes.IMPACT_E
 PENALTIES = {"E/1e4": E / 1e4, "E/100": E / 100, "E": E, "1000 E": 1000 * E}
 MATRIX = ["stopper", "block on block", "corner on corner", "notch"]
@@ -26,7 +27,7 @@ DTS = [pytest.param(1e-4, marks=pytest.mark.slow), 1e-3, 1e-2]
 
 def run_impact(name, penalty, dt, solver):
     scene, duration = scenes.IMPACTS[name](penalty)
-    sim = dda.Simulation(scene, dt=dt, solver=SOLVERS[solver]())
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver))
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         w = watch(sim, duration, chunk=1)
