@@ -30,8 +30,8 @@ from dda.profiling import StepProfile
 from dda.progress import ProgressBar
 from dda.recorder import Recorder, frame
 from dda.result import Frame, Result
+from dda.runtime import run_environment
 from dda.scene import Scene
-from dda.signals import sigterm_as_interrupt
 from dda.solvers.base import NonlinearSolver
 from dda.solvers.newton import NewtonRaphson
 from dda.step import StepSettings, StepState, step
@@ -211,9 +211,9 @@ class Simulation:
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)
         watchers = [w for w in (bar, callback) if w is not None]
-        # SIGTERM is Ctrl-C until the writer is closed: a second one during the checkpoint
-        # save must not kill the process before the files are complete
-        with sigterm_as_interrupt():
+        # SIGTERM is Ctrl-C until the writer is closed (a second one during the checkpoint
+        # save must not kill the process before the files are complete); one BLAS thread
+        with run_environment():
             try:
                 self._steps(result, t_end, recorder, writer, checkpoint, watchers)
             except SimulationError as exc:

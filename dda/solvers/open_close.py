@@ -53,6 +53,9 @@ NORMAL_FORCE_RTOL = 0.01
 NORMAL_FORCE_FLOOR = 1e-4
 # a linearized gap within this fraction of the edge's length of zero keeps the contact's state
 GAP_ROUND_OFF = 1e-12
+#: None, or a list that gets, per pass, (closing, opening, stick-slip switches, lagging sliding
+#: contacts): what kept the iteration going (benchmarks/stacks.py reads it)
+PASS_LOG = None
 
 
 @dataclass
@@ -104,6 +107,8 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         floor = NORMAL_FORCE_FLOOR * float(np.max(np.abs(t_n), initial=0.0))
         lag_ok = np.abs(t_n - t_n_lag) <= NORMAL_FORCE_RTOL * np.maximum(
             np.abs(t_n), np.abs(t_n_lag)) + floor
+        if PASS_LOG is not None:
+            PASS_LOG.append(_why(state, new_state, lag_ok))
         if np.array_equal(new_state, state) and np.all(lag_ok | (state != SLIP)):
             return OpenCloseResult(True, passes, "", d, state, gap, dgs, history)
         if new_state.tobytes() in seen and not np.array_equal(new_state, state):
@@ -111,6 +116,15 @@ def open_close(problem: StepProblem, explicit: bool) -> OpenCloseResult:
         seen.add(new_state.tobytes())
         state, t_n_lag, dgs_prev = new_state, t_n, dgs
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
+
+
+def _why(state, new_state, lag_ok) -> tuple[int, int, int, int]:
+    """What a pass found (for :data:`PASS_LOG`): contacts that close, that open, that switch
+    between stick and slip, and sliding contacts whose lagged normal force is off."""
+    was, now = state != OPEN, new_state != OPEN
+    return (int(np.count_nonzero(~was & now)), int(np.count_nonzero(was & ~now)),
+            int(np.count_nonzero(was & now & (state != new_state))),
+            int(np.count_nonzero(~lag_ok & (state == SLIP))))
 
 
 def _without_contacts(problem) -> OpenCloseResult:

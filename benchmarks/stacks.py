@@ -1,0 +1,145 @@
+"""N x N stacks of 1 m squares settling on a fixed base: the cost of a step against the C code.
+
+The Berkeley DDA code's own kind of test (issue 19): N x N unit squares (E 10 GPa, nu 0.25,
+2500 kg/m^3) stacked on a fixed base, joints p_n = p_s = 1e10 N/m and phi 35 degrees,
+gravity, dt 1e-3, ``max_open_close`` 30. Each (N, solver) runs in a fresh process (its peak
+memory is its own) for ``--steps`` steps and prints:
+
+- ms per step: the median of the steps' wall time, and CPU seconds per step (process time,
+  all threads);
+- OPEN-CLOSE passes, Newton iterations and linear solves per step; dt cuts;
+- why OPEN-CLOSE needed another pass, summed over the run: passes that closed contacts,
+  opened contacts, switched contacts between stick and slip only, or found only a sliding
+  contact whose lagged normal force was off by more than ``NORMAL_FORCE_RTOL``
+  (:data:`dda.solvers.open_close.PASS_LOG`);
+- peak resident memory above the process's size after the imports (MB).
+
+The C code's numbers on the same scenes (issue 19, same machine class, dt 1e-3): 1.17 ms (101
+blocks), 55.7 ms (901), 795 ms (3,601) per step, one OPEN-CLOSE pass.
+
+Writes ``benchmarks/results/stacks.md``.
+
+Run:  python benchmarks/stacks.py [--sizes 10 30 60] [--steps N] [--solvers legacy newton]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+C_CODE_MS = {10: 1.17, 30: 55.7, 60: 795.0}
+
+
+def stack(n: int):
+    """The N x N stack on its base (a scene)."""
+    import dda
+    from dda.contact import CoulombSingle, JointMaterial
+    from dda.materials import LinearElastic
+
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-1.0, -1.0), (n + 1.0, -1.0), (n + 1.0, 0.0), (-1.0, 0.0)], rock,
+                    fixed=True, name="base")
+    for i in range(n):
+        for j in range(n):
+            x, y = float(j), float(i)
+            scene.add_block([(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)], rock)
+    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                                  friction=CoulombSingle(phi=35.0)))
+    return scene
+
+
+def measure(n: int, solver: str, steps: int) -> dict:
+    """One run in this process (see the module docstring)."""
+    import dda
+    import dda.solvers.open_close as oc
+    from dda.registry import make_solver
+
+    scene = stack(n)
+    base_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    sim = dda.Simulation(scene, dt=1e-3, solver=make_solver(solver), max_open_close=30)
+    oc.PASS_LOG = []
+    cpu = time.process_time()
+    result = sim.run(steps * 1e-3, progress=False)
+    cpu = time.process_time() - cpu
+    log = np.array(oc.PASS_LOG, dtype=int).reshape(-1, 4)
+    oc.PASS_LOG = None
+    st = result.stats
+    blocked = log[:-1] if len(log) else log  # the last pass of a run ends it
+    return {
+        "n": n, "blocks": n * n + 1, "solver": solver, "steps": len(st),
+        "contacts": float(np.mean(st["contacts"])),
+        "ms_median": 1e3 * float(np.median(st["wall_time"])),
+        "cpu_ms": 1e3 * cpu / len(st),
+        "passes": float(np.mean(st["open_close_passes"])),
+        "iterations": float(np.mean(st["iterations"])),
+        "solves": float(np.mean(st["solves"])), "cuts": len(st.cuts),
+        "why_close": int(np.count_nonzero(blocked[:, 0])),
+        "why_open": int(np.count_nonzero(blocked[:, 1])),
+        "why_stick_slip_only": int(np.count_nonzero(
+            (blocked[:, 0] == 0) & (blocked[:, 1] == 0) & (blocked[:, 2] > 0))),
+        "why_lag_only": int(np.count_nonzero((blocked[:, :3] == 0).all(axis=1)
+                                             & (blocked[:, 3] > 0))),
+        "peak_mb": (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base_rss) / 1024.0,
+    }
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", type=int, nargs="+", default=[10, 30, 60])
+    ap.add_argument("--steps", type=int, default=None,
+                    help="steps per run (default: 100 up to 30 x 30, 30 beyond)")
+    ap.add_argument("--solvers", nargs="+", default=["legacy", "newton"])
+    ap.add_argument("--one", nargs=3, metavar=("N", "SOLVER", "STEPS"), help=argparse.SUPPRESS)
+    ap.add_argument("--out", default=str(HERE / "results" / "stacks.md"))
+    args = ap.parse_args(argv)
+    if args.one:  # the child process
+        print(json.dumps(measure(int(args.one[0]), args.one[1], int(args.one[2]))))
+        return None
+    rows = []
+    for n in args.sizes:
+        for solver in args.solvers:
+            steps = args.steps or (100 if n <= 30 else 30)
+            out = subprocess.run([sys.executable, __file__, "--one", str(n), solver,
+                                  str(steps)], capture_output=True, text=True, check=True)
+            row = json.loads(out.stdout.strip().splitlines()[-1])
+            rows.append(row)
+            print(_line(row), flush=True)
+    table = _table(rows)
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.out).write_text(table)
+    print(f"wrote {args.out}")
+    return rows
+
+
+def _line(r) -> str:
+    return (f"{r['blocks']:5d} blocks {r['solver']:6s} {r['ms_median']:8.1f} ms/step "
+            f"(C code {C_CODE_MS.get(r['n'], float('nan')):.4g}), {r['passes']:.2f} passes, "
+            f"{r['solves']:.2f} solves, {r['cuts']} cuts, {r['peak_mb']:.0f} MB")
+
+
+def _table(rows) -> str:
+    head = ("| blocks | contacts | solver | ms/step (median wall) | CPU ms/step | C code ms/step "
+            "| passes | iterations | solves | cuts | passes for: close / open / stick-slip "
+            "only / lag only | peak MB |\n|" + "---|" * 12 + "\n")
+    body = "".join(
+        f"| {r['blocks']:,} | {r['contacts']:,.0f} | {r['solver']} | {r['ms_median']:.1f} | "
+        f"{r['cpu_ms']:.1f} | {C_CODE_MS.get(r['n'], float('nan')):.4g} | {r['passes']:.2f} | "
+        f"{r['iterations']:.2f} | {r['solves']:.2f} | {r['cuts']} | {r['why_close']} / "
+        f"{r['why_open']} / {r['why_stick_slip_only']} / {r['why_lag_only']} | "
+        f"{r['peak_mb']:.0f} |\n" for r in rows)
+    return ("# N x N stacks settling under gravity (`python benchmarks/stacks.py`)\n\n"
+            "The first steps of dt 1e-3 from the start (100 up to 30 x 30, 30 beyond).\n\n"
+            + head + body)
+
+
+if __name__ == "__main__":
+    main()
