@@ -60,13 +60,20 @@ class NewtonRaphson(NonlinearSolver):
         return f"NewtonRaphson(tol={self.tol:g}, max_iter={self.max_iter})"
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
-        oc = open_close(problem, explicit=False)
-        if not oc.converged:
-            return StepSolution(None, None, False, oc.passes, 0, oc.reason)
-        if len(problem.element) == 0:  # no contacts: the step is linear, its solve exact
-            return StepSolution(oc.d, problem.element.contacts, True, oc.passes, 0)
-        sol = self.iterate(problem, oc.d)
-        sol.open_close_passes = oc.passes
+        # the predictor: OPEN-CLOSE with the open and closed states settled; only when Newton
+        # does not converge from it are the stick and slip states settled too
+        passes = 0
+        for settle_friction in (False, True):
+            oc = open_close(problem, explicit=False, settle_friction=settle_friction)
+            passes += oc.passes
+            if not oc.converged:
+                return StepSolution(None, None, False, passes, 0, oc.reason)
+            if len(problem.element) == 0:  # no contacts: the step is linear, its solve exact
+                return StepSolution(oc.d, problem.element.contacts, True, passes, 0)
+            sol = self.iterate(problem, oc.d)
+            sol.open_close_passes = passes
+            if sol.converged or oc.friction_settled:  # settling again would change nothing
+                break
         return sol
 
     def iterate(self, problem: StepProblem, d: np.ndarray) -> StepSolution:
