@@ -188,6 +188,14 @@ class Model:
         """Row of :attr:`joints` of the joint between blocks bj and bk (-1 where none)."""
         return self.joints.index(pair_key(bj, bk, self.n_blocks))
 
+    def spring_depths(self, contacts: ContactSet):
+        """The closed contacts of ``contacts`` (indices), how deep their springs sink
+        (``-t_n / p_n``, m) and their normal penalties."""
+        closed = np.flatnonzero(contacts.state != 0)
+        pn = self.joints.normal_penalty[self.joint_index(contacts.bj[closed],
+                                                         contacts.bk[closed])]
+        return closed, -contacts.t_n[closed] / pn, pn
+
     def initial_contacts(self) -> ContactSet:
         """An empty contact set with every law's history fields."""
         return ContactSet.empty(self.joints.history_fields)

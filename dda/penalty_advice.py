@@ -155,11 +155,9 @@ class PenaltyAdvisor:
 
     def _check_soft(self, c):
         model = self.model
-        closed = np.flatnonzero(c.state != 0)
+        closed, depth, pn = model.spring_depths(c)
         if len(closed) == 0:
             return
-        pn = model.joints.normal_penalty[model.joint_index(c.bj[closed], c.bk[closed])]
-        depth = -c.t_n[closed] / pn
         half = np.minimum(model.thickness[c.bj[closed]], model.thickness[c.bk[closed]])
         if not np.any(depth > SOFT_DEPTH * half):
             return

@@ -211,12 +211,7 @@ def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0
 
 def deepest_spring(model, contacts) -> float:
     """Deepest penetration of the committed closed springs (m)."""
-    closed = contacts.state != 0
-    if not closed.any():
-        return 0.0
-    pn = model.joints.normal_penalty[model.joint_index(contacts.bj[closed],
-                                                       contacts.bk[closed])]
-    return float(np.max(-contacts.t_n[closed] / pn))
+    return float(np.max(model.spring_depths(contacts)[1], initial=0.0))
 
 
 def _detect(model, state, d0, tolerance) -> _Detected:

@@ -97,8 +97,8 @@ def open_close(problem: StepProblem, explicit: bool,
     el = problem.element
     if len(el) == 0:  # no contacts: one linear solve settles the step
         return _without_contacts(problem)
-    history, t_stick, state, held = _start(el, explicit)
     gap_tol = round_off_gap(el)
+    history, t_stick, state, held = _start(el, explicit, gap_tol)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -163,7 +163,7 @@ def _without_contacts(problem) -> OpenCloseResult:
                            {k: v.copy() for k, v in el.contacts.history.items()})
 
 
-def _start(el, explicit):
+def _start(el, explicit, gap_tol):
     """The step's start: the pulled-back history, the stick springs' forces, the first
     states, and the contacts spared the friction check (legacy's explicit rule)."""
     c = el.contacts
@@ -181,7 +181,7 @@ def _start(el, explicit):
     spared = (state == STICK) if explicit else np.zeros(m, dtype=bool)
     # a contact that starts the step touching or penetrating is first tried closed: started
     # open, a stack of n touching blocks would need n passes to close from the bottom up
-    state[(state == OPEN) & (el.gap0 <= round_off_gap(el))] = STICK
+    state[(state == OPEN) & (el.gap0 <= gap_tol)] = STICK
     return history, t_stick, state, spared & closed0
 
 
