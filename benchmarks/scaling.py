@@ -128,9 +128,9 @@ def one(case: str, size: int, solver: str, steps: int, warm: int, dt: float,
     last = {}
     solve = linear._solve
 
-    def keep(k, rhs):
+    def keep(k, rhs, factor=None):
         last["k"], last["rhs"] = k, rhs
-        return solve(k, rhs)
+        return solve(k, rhs, factor)
 
     linear._solve = keep
     sim.run(warm * dt, progress=False)

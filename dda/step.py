@@ -167,7 +167,8 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     element = _element(model, state, found, ints.centroid)
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
                           d_known=d_known, element=element,
-                          max_open_close=settings.max_open_close, rigid=model.rigid)
+                          max_open_close=settings.max_open_close, rigid=model.rigid,
+                          factors=_factors(solver))
     sol = solver.solve_step(problem)
     costs = (problem.pattern.unknowns, found.n_pairs)
     if not sol.converged:
@@ -320,3 +321,9 @@ def _advanced(model, state, dt, sol, centroid, x_new, move, v_eff, known,
         last_move=float(np.max(np.hypot(move[:, 0], move[:, 1]))),
         untracked=guard.untracked, penetration=guard.deepest,
     )
+
+
+def _factors(solver):
+    """The solver's kept factorizations (a solver that is not a NonlinearSolver has none)."""
+    factors = getattr(solver, "factors", None)
+    return factors() if callable(factors) else None

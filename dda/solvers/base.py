@@ -7,6 +7,7 @@ simulation commits when it has converged).
 
 from __future__ import annotations
 
+import threading
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -17,6 +18,7 @@ from dda.contact.contacts import ContactSet
 from dda.contact.element import ContactElement
 from dda.profiling import section
 from dda.solvers.linear import SystemPattern
+from dda.solvers.sparse_factor import FactorSet, SparseFactor
 
 __all__ = ["NonlinearSolver", "StepProblem", "StepSolution"]
 
@@ -35,6 +37,8 @@ class StepProblem:
     element : ContactElement of the step's contacts
     max_open_close : limit of OPEN-CLOSE passes before the step is declared failed
     rigid : (n_blocks,) bool or None, blocks with 3 unknowns (no strain)
+    factors : FactorSet or None, the solver's factorizations kept from step to step
+        (:meth:`NonlinearSolver.factors`); one-off ones when None
     """
 
     dt: float
@@ -45,6 +49,12 @@ class StepProblem:
     element: ContactElement
     max_open_close: int = 12
     rigid: np.ndarray | None = None
+    factors: FactorSet | None = None
+
+    def factor(self, symmetric: bool) -> SparseFactor | None:
+        """Who factorizes this step's sparse systems, symmetric (the OPEN-CLOSE passes) or
+        not (Newton's tangent); None: a one-off holder per solve."""
+        return None if self.factors is None else self.factors.get(symmetric)
 
     @cached_property
     def pattern(self) -> SystemPattern:
@@ -79,6 +89,22 @@ class NonlinearSolver(ABC):
     """A strategy that solves one time step (DESIGN.md: LegacyPullBack, NewtonRaphson)."""
 
     name = "solver"
+
+    def factors(self) -> FactorSet:
+        """The sparse factorizations this solver keeps from step to step (their symbolic
+        analysis stands while the system's pattern does), one set per thread: a solver
+        shared by runs in threads never shares a factorization."""
+        per_thread = self.__dict__.setdefault("_factors", {})
+        key = threading.get_ident()
+        if key not in per_thread:
+            per_thread[key] = FactorSet()
+        return per_thread[key]
+
+    def __getstate__(self):
+        # factorizations are caches (and hold library handles): never pickled
+        state = self.__dict__.copy()
+        state.pop("_factors", None)
+        return state
 
     @abstractmethod
     def solve_step(self, problem: StepProblem) -> StepSolution:

@@ -1,31 +1,25 @@
 """One assembly and one solve of the step's linear system (6x6 blocks).
 
 Blocks whose motion is known carry no unknowns: the contact terms that couple them to a free
-block go to the right-hand side. Small systems are solved dense (LAPACK), larger ones sparse
-(SuperLU); the switch is at ``DENSE_LIMIT`` unknowns, where the two cost about the same on a
-two-core machine (measured in benchmarks/).
+block go to the right-hand side. Small systems are solved dense (LAPACK), larger ones by a
+sparse direct solver (:mod:`dda.solvers.sparse_factor`: MKL PARDISO or SuperLU); the switch is
+at ``DENSE_LIMIT`` unknowns (measured in benchmarks/).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from dda.profiling import count_solve, section
+from dda.solvers.sparse_factor import SingularSystemError, SparseFactor, make_factor
 
-__all__ = ["assemble_and_solve", "assemble_vector", "SystemPattern", "DENSE_LIMIT"]
+__all__ = ["assemble_and_solve", "assemble_vector", "SystemPattern", "DENSE_LIMIT",
+           "SingularSystemError"]
 
 DENSE_LIMIT = 300
-# SuperLU's diagonal pivot threshold in symmetric mode: an off-diagonal pivot only when the
-# diagonal is below this fraction of the column's largest entry
-SYMMETRIC_PIVOT = 0.1
 
 _I6, _J6 = np.meshgrid(np.arange(6), np.arange(6), indexing="ij")
-
-
-class SingularSystemError(RuntimeError):
-    """The step's matrix is singular (a block with no support in a static analysis)."""
 
 
 class SystemPattern:
@@ -149,7 +143,7 @@ class SystemPattern:
 
 
 def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, pattern=None,
-                       rigid=None):
+                       rigid=None, factor: SparseFactor | None = None):
     """Assemble and solve ``K d = F`` for the free blocks.
 
     Parameters
@@ -165,6 +159,10 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         The index work for (free, bj, bk, rigid), when it is reused (built here otherwise).
     rigid : (n_blocks,) bool, optional
         Blocks without strain unknowns (used when the pattern is built here).
+    factor : SparseFactor, optional
+        Who factorizes a sparse system (and may keep its symbolic analysis for the next one
+        with the same pattern): :meth:`dda.solvers.StepProblem.factor`. A one-off holder of
+        the default backend when None.
 
     Returns
     -------
@@ -180,45 +178,24 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         rhs = pattern.reduce(pattern.rhs(block_f, pair_k, pair_f, d_known))
     with section("solve"):
         count_solve()
-        sol = _solve(k, rhs)
+        sol = _solve(k, rhs, factor)
     d[pattern.free_blocks] = pattern.expand(sol).reshape(-1, 6)
     return d
 
 
-def _solve(k, rhs):
-    """Factorize and solve: dense LAPACK for an ndarray, SuperLU for a sparse matrix."""
+def _solve(k, rhs, factor: SparseFactor | None):
+    """Dense LAPACK for an ndarray; a sparse matrix goes to ``factor`` (a one-off holder of
+    the default backend when None, :mod:`dda.solvers.sparse_factor`)."""
     if isinstance(k, np.ndarray):
         try:
             sol = np.linalg.solve(k, rhs)
         except np.linalg.LinAlgError as exc:
             raise SingularSystemError(str(exc)) from None
     else:
-        sol = _sparse_solve(k, rhs)
+        sol = (factor or make_factor()).solve(k, rhs)
     if not np.all(np.isfinite(sol)):
         raise SingularSystemError("the step's system has no finite solution")
     return sol
-
-
-def _sparse_solve(k, rhs):
-    """SuperLU with a symmetric ordering, falling back to scipy's default on a poor result.
-
-    The step's matrix is structurally symmetric (every contact couples two blocks both ways)
-    and its diagonal carries the blocks' inertia and stiffness, so SuperLU's symmetric mode
-    (minimum degree on K + K^T, diagonal pivots preferred) keeps the fill low: on a
-    1000-brick wall 1.1 million factor entries against 2.1 million with the default column
-    ordering, and 2 to 3 times faster (benchmarks/scaling.py). Pivoting can still leave the
-    diagonal where it must, and the residual is checked.
-    """
-    try:
-        lu = spla.splu(k, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=SYMMETRIC_PIVOT,
-                       options={"SymmetricMode": True})
-        sol = lu.solve(rhs)
-        scale = np.abs(rhs).max()
-        if np.all(np.isfinite(sol)) and np.abs(k @ sol - rhs).max() <= 1e-8 * max(scale, 1e-300):
-            return sol
-    except RuntimeError:  # SuperLU: exactly singular
-        pass
-    return spla.spsolve(k, rhs)
 
 
 def assemble_vector(block_f, free, bj, bk, pair_f, rigid=None):

@@ -111,7 +111,7 @@ class NewtonRaphson(NonlinearSolver):
             try:
                 step = assemble_and_solve(problem.block_k, -block_r, free, el.bj, el.bk,
                                           resp.stiffness, -resp.residual, zero_known,
-                                          problem.pattern)
+                                          problem.pattern, factor=problem.factor(False))
             except SingularSystemError as exc:
                 return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
             d = d + step

@@ -111,7 +111,8 @@ def open_close(problem: StepProblem, explicit: bool,
         k, f = el.legacy_contributions(state, t_stick, t_slip)
         try:
             d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
-                                   el.bk, k, f, problem.d_known, problem.pattern)
+                                   el.bk, k, f, problem.d_known, problem.pattern,
+                                   factor=problem.factor(symmetric=True))
         except SingularSystemError as exc:
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         gap, dgs = el.linear_gaps(d)
@@ -155,7 +156,7 @@ def _without_contacts(problem) -> OpenCloseResult:
     try:
         d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj, el.bk,
                                np.zeros((0, 12, 12)), np.zeros((0, 12)), problem.d_known,
-                               problem.pattern)
+                               problem.pattern, factor=problem.factor(symmetric=True))
     except SingularSystemError as exc:
         return OpenCloseResult(False, 1, f"singular system: {exc}")
     z = np.zeros(0)

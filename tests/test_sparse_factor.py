@@ -1,0 +1,131 @@
+"""The sparse direct solvers: exact answers, the symbolic analysis kept only while the pattern
+stands, and a fall back to SuperLU when PARDISO cannot or must not answer."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import dda
+from dda.solvers import LegacyPullBack, NewtonRaphson
+from dda.solvers import sparse_factor as sf
+
+pardiso = pytest.mark.skipif(not sf._pardiso_available(), reason="pypardiso/MKL not installed")
+
+
+def block_system(n_blocks, seed, unsymmetric=0.0, drop=()):
+    """A chain of 6 x 6 blocks as the step makes them: SPD diagonal blocks, coupled to the
+    next block (CSC, sorted, structurally symmetric). ``drop`` leaves couplings out."""
+    rng = np.random.default_rng(seed)
+    n = 6 * n_blocks
+    rows, cols, vals = [], [], []
+    for b in range(n_blocks):
+        a = rng.normal(size=(6, 6))
+        blk = a @ a.T + 40.0 * np.eye(6)
+        r, c = np.meshgrid(np.arange(6) + 6 * b, np.arange(6) + 6 * b, indexing="ij")
+        rows.append(r.ravel()), cols.append(c.ravel()), vals.append(blk.ravel())
+        if b + 1 < n_blocks and b not in drop:
+            cpl = rng.normal(size=(6, 6))
+            r, c = np.meshgrid(np.arange(6) + 6 * b, np.arange(6) + 6 * b + 6, indexing="ij")
+            other = cpl.T + unsymmetric * rng.normal(size=(6, 6))
+            rows += [r.ravel(), c.ravel()]
+            cols += [c.ravel(), r.ravel()]
+            vals += [cpl.ravel(), other.T.ravel()]
+    k = sp.csc_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n, n))
+    k.sort_indices()
+    return k, rng.normal(size=n)
+
+
+def assert_solves(k, x, rhs):
+    np.testing.assert_allclose(k @ x, rhs, atol=1e-10 * np.abs(rhs).max())
+
+
+@pytest.mark.parametrize("backend", ["superlu", pytest.param("pardiso", marks=pardiso)])
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_backends_solve_exactly(backend, symmetric):
+    k, rhs = block_system(80, 1, unsymmetric=0.0 if symmetric else 0.4)
+    assert (abs(k - k.T).max() == 0.0) == symmetric
+    f = sf.make_factor(backend, symmetric)
+    assert_solves(k, f.solve(k, rhs), rhs)
+    assert f.factorizations == 1
+
+
+@pardiso
+def test_symbolic_analysis_is_kept_while_the_pattern_stands():
+    f = sf.make_factor("pardiso", symmetric=True)
+    for seed in range(3):  # new values, same pattern: numeric factorization only
+        k, rhs = block_system(60, seed)
+        assert_solves(k, f.solve(k, rhs), rhs)
+    assert (f.analyses, f.factorizations) == (1, 3)
+    k, rhs = block_system(60, 7, drop=(10, 30))  # a coupling less: analysed again
+    assert_solves(k, f.solve(k, rhs), rhs)
+    assert (f.analyses, f.factorizations) == (2, 4)
+    k, rhs = block_system(60, 8)  # back to the first pattern: analysed again, still exact
+    assert_solves(k, f.solve(k, rhs), rhs)
+    assert (f.analyses, f.factorizations, f.fallbacks) == (3, 5, 0)
+
+
+@pardiso
+def test_pardiso_falls_back_to_superlu_when_it_must_not_answer():
+    # an indefinite symmetric matrix: not for PARDISO's positive definite type
+    k, rhs = block_system(40, 3)
+    k = (k - 60.0 * sp.eye(k.shape[0], format="csc")).tocsc()
+    k.sort_indices()
+    f = sf.make_factor("pardiso", symmetric=True)
+    assert_solves(k, f.solve(k, rhs), rhs)
+    # an unsymmetric matrix said to be symmetric: the upper triangle alone is the wrong
+    # matrix, and the residual check sends it to SuperLU
+    k2, rhs2 = block_system(40, 4, unsymmetric=0.5)
+    assert_solves(k2, f.solve(k2, rhs2), rhs2)
+    assert f.fallbacks == 2
+
+
+def test_backend_choice_by_environment(monkeypatch):
+    monkeypatch.setenv("DDA_SPARSE_SOLVER", "superlu")
+    assert sf.default_backend() == "superlu"
+    assert isinstance(sf.FactorSet().get(True), sf.SuperLUFactor)
+    monkeypatch.setenv("DDA_SPARSE_SOLVER", "umfpack")
+    with pytest.raises(ValueError, match="DDA_SPARSE_SOLVER must be one of pardiso, superlu"):
+        sf.default_backend()
+
+
+def stack(n):
+    from dda.contact import CoulombSingle, JointMaterial
+    from dda.materials import LinearElastic
+
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-1.0, -1.0), (n + 1.0, -1.0), (n + 1.0, 0.0), (-1.0, 0.0)], rock,
+                    fixed=True)
+    for i in range(n):
+        for j in range(n):
+            scene.add_block([(j, i), (j + 1, i), (j + 1, i + 1), (j, i + 1)], rock)
+    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                                  friction=CoulombSingle(phi=35.0)))
+    return scene
+
+
+@pardiso
+@pytest.mark.parametrize("solver", [LegacyPullBack, NewtonRaphson])
+def test_a_stack_settles_alike_with_either_backend(monkeypatch, solver):
+    """9 x 9 blocks (486 unknowns: the sparse path) for 15 steps: the two backends agree to
+    round-off, and the symbolic analysis is done once for the steps whose pattern stands."""
+    out = {}
+    for backend in ("superlu", "pardiso"):
+        monkeypatch.setenv("DDA_SPARSE_SOLVER", backend)
+        s = solver()
+        sim = dda.Simulation(stack(9), dt=1e-3, solver=s, max_open_close=30)
+        r = sim.run(0.015, progress=False)
+        out[backend] = (sim.committed.x.copy(), np.asarray(r.stats["open_close_passes"]))
+        factorizations, analyses = s.factors().counts
+        assert factorizations == int(np.sum(r.stats["solves"]))
+        if backend == "pardiso":
+            assert analyses < factorizations / 3
+        pickle.loads(pickle.dumps(s))  # the factorizations are not part of the solver's state
+        assert "_factors" not in pickle.loads(pickle.dumps(s)).__dict__
+    np.testing.assert_allclose(out["pardiso"][0], out["superlu"][0], rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(out["pardiso"][1], out["superlu"][1])
