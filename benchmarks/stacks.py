@@ -7,7 +7,9 @@ memory is its own) for ``--steps`` steps and prints:
 
 - ms per step: the median of the steps' wall time, and CPU seconds per step (process time,
   all threads);
-- OPEN-CLOSE passes, Newton iterations and linear solves per step; dt cuts;
+- OPEN-CLOSE passes, Newton iterations and linear solves per step, and how many of those
+  solves factorized the matrix (numeric factorizations) and analysed its pattern (symbolic
+  analyses; the sparse solver, ``DDA_SPARSE_SOLVER``, is in the table); dt cuts;
 - why OPEN-CLOSE needed another pass, summed over the run: passes that closed contacts,
   opened contacts, switched contacts between stick and slip only, or found only a sliding
   contact whose lagged normal force was off by more than ``NORMAL_FORCE_RTOL``
@@ -65,7 +67,8 @@ def measure(n: int, solver: str, steps: int) -> dict:
 
     scene = stack(n)
     base_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    sim = dda.Simulation(scene, dt=1e-3, solver=make_solver(solver), max_open_close=30)
+    nonlinear = make_solver(solver)
+    sim = dda.Simulation(scene, dt=1e-3, solver=nonlinear, max_open_close=30)
     oc.PASS_LOG = []
     cpu = time.process_time()
     result = sim.run(steps * 1e-3, progress=False)
@@ -82,6 +85,10 @@ def measure(n: int, solver: str, steps: int) -> dict:
         "passes": float(np.mean(st["open_close_passes"])),
         "iterations": float(np.mean(st["iterations"])),
         "solves": float(np.mean(st["solves"])), "cuts": len(st.cuts),
+        # numeric factorizations and symbolic analyses of the sparse system per step
+        "factorizations": nonlinear.factors().counts[0] / max(len(st), 1),
+        "analyses": nonlinear.factors().counts[1] / max(len(st), 1),
+        "backend": nonlinear.factors().backend,
         "why_close": int(np.count_nonzero(blocked[:, 0])),
         "why_open": int(np.count_nonzero(blocked[:, 1])),
         "why_stick_slip_only": int(np.count_nonzero(
@@ -123,17 +130,21 @@ def main(argv=None):
 def _line(r) -> str:
     return (f"{r['blocks']:5d} blocks {r['solver']:6s} {r['ms_median']:8.1f} ms/step "
             f"(C code {C_CODE_MS.get(r['n'], float('nan')):.4g}), {r['passes']:.2f} passes, "
-            f"{r['solves']:.2f} solves, {r['cuts']} cuts, {r['peak_mb']:.0f} MB")
+            f"{r['solves']:.2f} solves, {r['factorizations']:.2f} factorizations, "
+            f"{r['analyses']:.2f} analyses ({r['backend']}), {r['cuts']} cuts, "
+            f"{r['peak_mb']:.0f} MB")
 
 
 def _table(rows) -> str:
     head = ("| blocks | contacts | solver | ms/step (median wall) | CPU ms/step | C code ms/step "
-            "| passes | iterations | solves | cuts | passes for: close / open / stick-slip "
-            "only / lag only | peak MB |\n|" + "---|" * 12 + "\n")
+            "| passes | iterations | solves | factorizations (analyses) | sparse solver | cuts "
+            "| passes for: close / open / stick-slip only / lag only | peak MB |\n|"
+            + "---|" * 14 + "\n")
     body = "".join(
         f"| {r['blocks']:,} | {r['contacts']:,.0f} | {r['solver']} | {r['ms_median']:.1f} | "
         f"{r['cpu_ms']:.1f} | {C_CODE_MS.get(r['n'], float('nan')):.4g} | {r['passes']:.2f} | "
-        f"{r['iterations']:.2f} | {r['solves']:.2f} | {r['cuts']} | {r['why_close']} / "
+        f"{r['iterations']:.2f} | {r['solves']:.2f} | {r['factorizations']:.2f} "
+        f"({r['analyses']:.2f}) | {r['backend']} | {r['cuts']} | {r['why_close']} / "
         f"{r['why_open']} / {r['why_stick_slip_only']} / {r['why_lag_only']} | "
         f"{r['peak_mb']:.0f} |\n" for r in rows)
     return ("# N x N stacks settling under gravity (`python benchmarks/stacks.py`)\n\n"

@@ -122,10 +122,25 @@ def test_a_stack_settles_alike_with_either_backend(monkeypatch, solver):
         r = sim.run(0.015, progress=False)
         out[backend] = (sim.committed.x.copy(), np.asarray(r.stats["open_close_passes"]))
         factorizations, analyses = s.factors().counts
-        assert factorizations == int(np.sum(r.stats["solves"]))
+        assert 0.5 * np.sum(r.stats["solves"]) < factorizations <= np.sum(r.stats["solves"])
         if backend == "pardiso":
             assert analyses < factorizations / 3
         pickle.loads(pickle.dumps(s))  # the factorizations are not part of the solver's state
         assert "_factors" not in pickle.loads(pickle.dumps(s)).__dict__
     np.testing.assert_allclose(out["pardiso"][0], out["superlu"][0], rtol=0, atol=1e-9)
     np.testing.assert_array_equal(out["pardiso"][1], out["superlu"][1])
+
+
+@pytest.mark.parametrize("backend", ["superlu", pytest.param("pardiso", marks=pardiso)])
+def test_the_same_matrix_is_factorized_once(backend):
+    """Passes that change loads only solve with the factorization they have; a matrix with
+    other values (same pattern) is factorized again."""
+    f = sf.make_factor(backend, symmetric=True)
+    k, rhs = block_system(60, 1)
+    for scale in (1.0, -2.0, 0.5):
+        assert_solves(k, f.solve(k, scale * rhs + 1.0), scale * rhs + 1.0)
+    assert f.factorizations == 1
+    k2 = k.copy()
+    k2.data[0] *= 1.5
+    assert_solves(k2, f.solve(k2, rhs), rhs)
+    assert f.factorizations == 2

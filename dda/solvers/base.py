@@ -58,9 +58,13 @@ class StepProblem:
 
     @cached_property
     def pattern(self) -> SystemPattern:
-        """The assembly's index work for this step's blocks and contacts (built once)."""
+        """The assembly's index work for this step's blocks and contacts (built once, and
+        kept for the next step when its blocks and contacts are the same)."""
         with section("assembly"):
-            return SystemPattern(self.free, self.element.bj, self.element.bk, self.rigid)
+            args = (self.free, self.element.bj, self.element.bk, self.rigid)
+            if self.factors is None:
+                return SystemPattern(*args)
+            return self.factors.kept("pattern", args, lambda: SystemPattern(*args))
 
 
 @dataclass

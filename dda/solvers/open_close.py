@@ -36,6 +36,12 @@ Three rules keep the iteration honest (each was needed; tests/test_dynamics.py s
   switched (an active-set step), which ends the two-pass cycles of a block bouncing off a
   stiff contact.
 
+A contact that has been opened and closed again within the step and would open once more,
+held by less than ``NORMAL_FORCE_FLOOR`` of the largest normal force, stays closed: it touches
+with no force to speak of (closed, its spring pulls 6.4 N; open, it penetrates 1.7e-9 m, in the
+10 x 10 stack of ``benchmarks/stacks.py``), and it would otherwise switch every pass until the
+pass limit cuts the step.
+
 And a contact whose linearized gap is within round-off of zero (:func:`round_off_gap`) keeps
 its state: blocks that move alike leave their joint's gap at noise level, and the noise's sign
 would open and close such contacts by the thousand every pass (a 10,000-brick wall did not
@@ -103,6 +109,7 @@ def open_close(problem: StepProblem, explicit: bool,
     dgs_prev = np.zeros(len(el))
     passes = 0
     seen = {state.tobytes()}
+    flips = np.zeros(len(el), dtype=np.int64)  # open <-> closed changes of each contact so far
     for passes in range(1, problem.max_open_close + 1):
         # evaluated on every closed contact (used on the sliding ones): a law that judges
         # faces needs a face's sticking contacts too
@@ -124,6 +131,14 @@ def open_close(problem: StepProblem, explicit: bool,
         floor = NORMAL_FORCE_FLOOR * float(np.max(np.abs(t_n), initial=0.0))
         lag_ok = np.abs(t_n - t_n_lag) <= NORMAL_FORCE_RTOL * np.maximum(
             np.abs(t_n), np.abs(t_n_lag)) + floor
+        # a contact that has been opened and closed again in this step's passes and would
+        # open once more, with a spring that holds less than the floor's force, stays closed:
+        # it touches with no force to speak of, open it penetrates, closed it pulls by round-
+        # off, and alone it would cycle between the two until the pass limit
+        cycling = ((flips >= 2) & (state != OPEN) & (new_state == OPEN)
+                   & (el.normal_penalty * gap <= floor))
+        new_state[cycling] = state[cycling]
+        flips += (state != OPEN) != (new_state != OPEN)
         if PASS_LOG is not None:
             PASS_LOG.append(_why(state, new_state, lag_ok))
         # settled when no state changes and every sliding contact's friction came from this

@@ -20,6 +20,9 @@ Measured on the systems of the N x N stacks (one thread): 5,400 unknowns, SuperL
 factorization, PARDISO 7.6 ms analysis + 4.5 ms numeric (LDL^T) or 10-12 ms (LU); 21,600
 unknowns, 400 ms against 52 + 35 ms.
 
+Both keep the numeric factorization of the last matrix: an OPEN-CLOSE pass that changes only
+loads (the friction of sliding contacts) and not the springs solves with it again.
+
 :func:`default_backend` picks ``pardiso`` when it can be loaded, else ``superlu``; the
 environment variable ``DDA_SPARSE_SOLVER`` (``pardiso`` or ``superlu``) overrides the choice.
 """
@@ -52,7 +55,8 @@ class SparseFactor:
     """One backend's factorization of the step's matrix, reused for every right-hand side.
 
     ``solve(k, rhs)`` factorizes ``k`` and solves; a backend may keep work that depends on
-    ``k``'s pattern only (the symbolic analysis) for the next matrix with the same pattern.
+    ``k``'s pattern only (the symbolic analysis) for the next matrix with the same pattern, and
+    the factorization itself for the next call with the same matrix.
     ``symmetric`` says the caller guarantees a symmetric matrix.
     """
 
@@ -71,14 +75,32 @@ class SparseFactor:
 
 
 class SuperLUFactor(SparseFactor):
-    """SciPy's SuperLU (see the module docstring); keeps nothing between matrices."""
+    """SciPy's SuperLU (see the module docstring); keeps the last factorization for the next
+    call with the same matrix."""
 
     name = "superlu"
 
+    def __init__(self, symmetric: bool = False):
+        super().__init__(symmetric)
+        self._last = None  # (indptr, indices, data, lu) of the matrix factorized last
+
     def solve(self, k, rhs):
+        last = self._last
+        if last is not None and all(np.array_equal(x, y) for x, y in zip(
+                last[:3], (k.indptr, k.indices, k.data), strict=True)):
+            sol = last[3].solve(rhs)
+            if _small_residual(k, sol, rhs):
+                return sol
+        self._last = None
         self.factorizations += 1
         self.analyses += 1
-        return superlu_solve(k, rhs)
+        lu = superlu_factor(k)
+        if lu is not None:
+            sol = lu.solve(rhs)
+            if _small_residual(k, sol, rhs):
+                self._last = (k.indptr.copy(), k.indices.copy(), k.data.copy(), lu)
+                return sol
+        return spla.spsolve(k, rhs)
 
 
 def superlu_solve(k, rhs):
@@ -91,15 +113,22 @@ def superlu_solve(k, rhs):
     ordering, and 2 to 3 times faster (benchmarks/scaling.py). Pivoting can still leave the
     diagonal where it must, and the residual is checked.
     """
-    try:
-        lu = spla.splu(k, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=SYMMETRIC_PIVOT,
-                       options={"SymmetricMode": True})
+    lu = superlu_factor(k)
+    if lu is not None:
         sol = lu.solve(rhs)
         if _small_residual(k, sol, rhs):
             return sol
-    except RuntimeError:  # SuperLU: exactly singular
-        pass
     return spla.spsolve(k, rhs)
+
+
+def superlu_factor(k):
+    """SuperLU's factorization in symmetric mode (see :func:`superlu_solve`), or None when it
+    finds the matrix exactly singular."""
+    try:
+        return spla.splu(k, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=SYMMETRIC_PIVOT,
+                         options={"SymmetricMode": True})
+    except RuntimeError:  # SuperLU: exactly singular
+        return None
 
 
 def _small_residual(k, sol, rhs) -> bool:
@@ -125,6 +154,7 @@ class PardisoFactor(SparseFactor):
         self._solver = _pardiso_solver(mtype=2 if symmetric else 11)
         self._pattern = None  # (indptr, indices) of the analysed matrix (PARDISO's CSR)
         self._csr = None  # (CSC -> CSR data order, indptr, indices) of the last pattern
+        self._values = None  # the values of the matrix factorized last
         self.fallbacks = 0
 
     def solve(self, k, rhs):
@@ -137,13 +167,16 @@ class PardisoFactor(SparseFactor):
         try:
             if not same:
                 self._analyse(a)
-            self._solver.set_phase(22)
-            self._solver._call_pardiso(a, b)
-            self.factorizations += 1
+            if not (same and self._values is not None and np.array_equal(self._values, a.data)):
+                self._values = None
+                self._solver.set_phase(22)
+                self._solver._call_pardiso(a, b)
+                self.factorizations += 1
+                self._values = a.data.copy()
             self._solver.set_phase(33)
             sol = self._solver._call_pardiso(a, b).reshape(-1)
         except PyPardisoError:
-            self._pattern = None
+            self._pattern = self._values = None
             sol = None
         if sol is not None and _small_residual(k, sol, rhs):
             return sol
@@ -151,7 +184,7 @@ class PardisoFactor(SparseFactor):
         return superlu_solve(k, rhs)
 
     def _analyse(self, a):
-        self._pattern = None
+        self._pattern = self._values = None
         self._solver.set_phase(11)
         self._solver._call_pardiso(a, np.zeros((a.shape[0], 1)))
         self.analyses += 1
@@ -265,6 +298,23 @@ class FactorSet:
     def __init__(self, backend: str | None = None):
         self.backend = backend or default_backend()
         self._factors: dict[bool, SparseFactor] = {}
+        self._kept: dict[str, tuple] = {}
+
+    def kept(self, name: str, key: tuple, build):
+        """``build()``, or the object built last under ``name`` when ``key`` (a tuple of
+        arrays or None) equals the one it was built from: the assembly's index work
+        (:class:`dda.solvers.linear.SystemPattern`) stands while the step's blocks and
+        contacts do."""
+        last = self._kept.get(name)
+        if last is not None and len(last[0]) == len(key) and all(
+                (a is None and b is None) or (a is not None and b is not None
+                                              and np.array_equal(a, b))
+                for a, b in zip(last[0], key, strict=True)):
+            return last[1]
+        made = build()
+        self._kept[name] = (tuple(None if a is None else np.array(a, copy=True) for a in key),
+                            made)
+        return made
 
     def get(self, symmetric: bool) -> SparseFactor:
         """The factorization holder for symmetric (or general) matrices."""
