@@ -1,10 +1,13 @@
-"""The compiled assembly (dda.kernels) against the numpy one and a dense reference."""
+"""The compiled assembly (dda.kernels) against the numpy one, and the contacts' rank-one terms
+against the (m, 12, 12) formulas they replace."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
+from dda.contact.kinematics import trial_kinematics
+from dda.contact.tangent import consistent_tangent, spring_stiffness
 from dda.kernels import PairStiffness
 from dda.solvers.linear import DENSE_LIMIT, SystemPattern, assemble_and_solve
 
@@ -144,3 +147,37 @@ def test_pair_stiffness_is_its_array():
         PairStiffness(rows, [[0, 1]], w)
     with pytest.raises(ValueError, match="outside"):
         PairStiffness(rows, [[0, 2], [1, 0], [1, 1]], w)
+
+
+def test_springs_are_the_legacy_outer_products():
+    rng = np.random.default_rng(5)
+    e, i = rng.normal(size=(2, 30, 12))
+    kn, ks = rng.random(30) * 1e9, np.where(rng.random(30) < 0.5, 1e9, 0.0)
+    expected = kn[:, None, None] * (e[:, :, None] * e[:, None, :])
+    expected += ks[:, None, None] * (i[:, :, None] * i[:, None, :])
+    np.testing.assert_array_equal(spring_stiffness(e, i, kn, ks).dense(), expected)
+
+
+def test_consistent_tangent_equals_the_hessian_form():
+    """The four rank-one terms equal k_n E^T E + I^T S + t_n Delta delta g_n
+    + t_s Delta delta g_s with the second variations of trial_kinematics."""
+    rng = np.random.default_rng(6)
+    m = 40
+    p1, p2, p3 = rng.normal(size=(3, m, 2))
+    maps = tuple(rng.normal(size=(m, 2, 12)) for _ in range(3))
+    xi0 = rng.random(m)
+    kin = trial_kinematics(p1, p2, p3, xi0, maps, second=True)
+    closed = rng.random(m) < 0.7
+    kn = np.where(closed, 1e3, 0.0)
+    kss, ksn = np.where(closed, rng.normal(size=(2, m)), 0.0)
+    t_n = np.where(closed, -rng.random(m), 0.0)
+    t_s = np.where(closed, rng.normal(size=m), 0.0)
+    e, i = kin.e_row, kin.i_row
+    expected = kn[:, None, None] * (e[:, :, None] * e[:, None, :])
+    shear_row = kss[:, None] * i + ksn[:, None] * e
+    expected += np.where(closed[:, None, None], i[:, :, None] * shear_row[:, None, :], 0.0)
+    expected += t_n[:, None, None] * kin.gn_hessian + t_s[:, None, None] * kin.gs_hessian
+    got = consistent_tangent(kin, maps, xi0, kn, kss, ksn, t_n, t_s, closed).dense()
+    scale = np.abs(expected).max(axis=(1, 2), keepdims=True)
+    assert np.all(np.abs(got - expected) <= 1e-12 * scale)
+    assert np.all(got[~closed] == 0.0)
