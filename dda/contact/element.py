@@ -2,7 +2,8 @@
 
 It owns the kinematics of the step's contacts (METHOD.md section 3), asks each friction law for
 forces and tangents of its contacts (section 4), and returns stiffness and force contributions
-as (m, 12, 12) and (m, 12) arrays for one sparse assembly.
+for one sparse assembly: the stiffness as rank-one terms (:class:`dda.kernels.PairStiffness`,
+an (m, 12, 12) array on request), the forces as an (m, 12) array.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from dda.contact.kinematics import (
     trial_kinematics,
     tributary_length,
 )
+from dda.contact.tangent import consistent_tangent, spring_stiffness
+from dda.kernels.pair_stiffness import PairStiffness
 from dda.profiling import section
 
 __all__ = ["ContactElement", "LawGroups"]
@@ -133,7 +136,7 @@ class ContactResponse:
     t_s: np.ndarray
     history: dict[str, np.ndarray]
     residual: np.ndarray
-    stiffness: np.ndarray
+    stiffness: PairStiffness  # (m, 12, 12) on request (np.asarray)
 
 
 class ContactElement:
@@ -256,7 +259,8 @@ class ContactElement:
 
         Returns
         -------
-        k : (m, 12, 12) and f : (m, 12)
+        k : PairStiffness, the (m, 12, 12) stiffness as rank-one terms
+        f : (m, 12)
         """
         with section("contact_element"):
             return self._legacy_contributions(state, t_stick, t_s_slip)
@@ -268,12 +272,10 @@ class ContactElement:
         kn = np.where(closed, self.normal_penalty, 0.0)
         ks = np.where(stick, self.shear_penalty, 0.0)
         e, i = self.e_row, self.i_row
-        k = kn[:, None, None] * (e[:, :, None] * e[:, None, :])
-        k += ks[:, None, None] * (i[:, :, None] * i[:, None, :])
         fn = kn * self.gap0
         fs = np.where(stick, t_stick, 0.0) + np.where(slip, t_s_slip, 0.0)
         f = -(fn[:, None] * e + fs[:, None] * i)
-        return k, f
+        return spring_stiffness(e, i, kn, ks), f
 
     def response(self, d: np.ndarray) -> ContactResponse:
         """Contact forces and consistent tangent at the trial increments d (METHOD.md s. 3-4).
@@ -297,19 +299,15 @@ class ContactElement:
         p1 = g.p1 + np.einsum("mij,mj->mi", a1, dd)
         p2 = g.p2 + np.einsum("mij,mj->mi", a2, dd)
         p3 = g.p3 + np.einsum("mij,mj->mi", a3, dd)
-        kin = trial_kinematics(p1, p2, p3, self.contacts.xi0, self.maps, second=True)
+        kin = trial_kinematics(p1, p2, p3, self.contacts.xi0, self.maps, second=False)
         closed = kin.gap < 0.0
         pn, ps = self.normal_penalty, self.shear_penalty
         t_n = np.where(closed, pn * kin.gap, 0.0)
         dgs = kin.shear - self.shear0
         t_s, slipping, history, (kss, ksn) = self.laws.return_map(  # the law's tangent too
             self.contacts.history, dgs, t_n, ps, self.length, where=closed, normal_penalty=pn)
-        e, i = kin.e_row, kin.i_row
-        residual = t_n[:, None] * e + t_s[:, None] * i
-        kn = np.where(closed, pn, 0.0)
-        stiffness = kn[:, None, None] * (e[:, :, None] * e[:, None, :])
-        shear_row = kss[:, None] * i + ksn[:, None] * e
-        stiffness += np.where(closed[:, None, None], i[:, :, None] * shear_row[:, None, :], 0.0)
-        stiffness += t_n[:, None, None] * kin.gn_hessian + t_s[:, None, None] * kin.gs_hessian
+        residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
+        stiffness = consistent_tangent(kin, self.maps, self.contacts.xi0,
+                                       np.where(closed, pn, 0.0), kss, ksn, t_n, t_s, closed)
         return ContactResponse(closed, slipping & closed, t_n, t_s, history, residual,
                                stiffness)

@@ -8,9 +8,13 @@ at ``DENSE_LIMIT`` unknowns (measured in benchmarks/).
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 import scipy.sparse as sp
 
+from dda.kernels.assembly import matrix_data, rhs_data
+from dda.kernels.pair_stiffness import PairStiffness
 from dda.profiling import count_solve, section
 from dda.solvers.sparse_factor import SingularSystemError, SparseFactor, make_factor
 
@@ -27,7 +31,8 @@ class SystemPattern:
 
     The blocks with unknowns and the contacts' block pairs do not change within a step, so
     the index work of the assembly (slots, masks, the sorted sparse structure) is done once
-    per step and every OPEN-CLOSE pass or Newton iteration only sums values into place.
+    per step and every OPEN-CLOSE pass or Newton iteration only sums values into place (in
+    compiled code when the contacts' stiffness comes as a :class:`dda.kernels.PairStiffness`).
 
     Parameters
     ----------
@@ -54,13 +59,19 @@ class SystemPattern:
             self.keep = np.flatnonzero(mask.ravel())
             self.unknowns = len(self.keep)
         # the matrix is made of 6 x 6 blocks: index work on block entries, not scalars
+        m = len(bj)
         brow, bcol = [slot[free_blocks]], [slot[free_blocks]]
         self.rhs_index = []  # per side a: (contacts whose block a is free, their rhs rows)
         self.couplings = []  # per (a, b): (a, b, both free, a free and b known, ...)
-        if len(bj):
+        # per side a of each contact: its block, and its first rhs row (-1: a known block)
+        self.side_block = np.zeros((2, m), dtype=np.int64)
+        self.side_row = np.full((2, m), -1, dtype=np.int64)
+        if m:
             for a, ba in enumerate((bj, bk)):
                 sa = slot[ba]
                 fa = sa >= 0
+                self.side_block[a] = ba
+                self.side_row[a, fa] = 6 * sa[fa]
                 self.rhs_index.append((fa, ((6 * sa[fa])[:, None] + np.arange(6)).ravel()))
                 for b, bb in enumerate((bj, bk)):
                     sb = slot[bb]
@@ -71,37 +82,84 @@ class SystemPattern:
                     known = (bb[to_rhs], ((6 * sa[to_rhs])[:, None] + np.arange(6)).ravel())
                     self.couplings.append((a, b, both, to_rhs, known))
         br, bc = np.concatenate(brow), np.concatenate(bcol)
+        # entry (i, j) of block entry e goes to data[base[e] + i row_step + j col_step[e]]
         if n <= DENSE_LIMIT:
-            self.dense_index = ((6 * br[:, None, None] + _I6) * n
-                                + 6 * bc[:, None, None] + _J6).reshape(-1)
-            return
-        # compressed sparse columns: block entries sorted by block column, then block row;
-        # within block column J, scalar column 6J + j lists the 6 rows of each block in turn
+            self.nnz = n * n
+            self.row_step = n
+            base = 6 * br * n + 6 * bc
+            col_step = np.ones_like(base)
+        else:
+            base, col_step = self._csc_layout(br, bc, len(free_blocks))
+        self._entry_layout = (base, col_step)
         nf = len(free_blocks)
+        self.block_base, self.block_step = base[:nf], col_step[:nf]
+        # per coupling (a, b) = divmod(row, 2): where each contact's block goes (-1: nowhere)
+        self.pair_base = np.full((4, m), -1, dtype=np.int64)
+        self.pair_step = np.zeros((4, m), dtype=np.int64)
+        start = nf
+        for ab, (_, _, both, _, _) in enumerate(self.couplings):
+            idx = np.flatnonzero(both)
+            self.pair_base[ab, idx] = base[start:start + len(idx)]
+            self.pair_step[ab, idx] = col_step[start:start + len(idx)]
+            start += len(idx)
+        if self.keep is not None and n > DENSE_LIMIT:
+            self._kept_structure()
+
+    def _csc_layout(self, br, bc, nf):
+        """Compressed sparse columns: block entries sorted by block column, then block row;
+        within block column J, scalar column 6J + j lists the 6 rows of each block in turn.
+        Sets the structure and returns each block entry's base and column step."""
         ub, inverse = np.unique(bc * nf + br, return_inverse=True)
         ucol, urow = ub // nf, ub % nf
         count = np.bincount(ucol, minlength=nf)
         bptr = np.concatenate([[0], np.cumsum(count)])
         rank = np.arange(len(ub)) - bptr[ucol]
-        # position of entry (i, j) of unique block u in the CSC data
-        pos = (36 * bptr[ucol][:, None, None] + _J6 * 6 * count[ucol][:, None, None]
-               + 6 * rank[:, None, None] + _I6)
-        self.slot_of_entry = pos[inverse].reshape(-1)
         self.nnz = 36 * len(ub)
+        self.row_step = 1
+        base = 36 * bptr[ucol] + 6 * rank
+        step = 6 * count[ucol]
+        pos = base[:, None, None] + _J6 * step[:, None, None] + _I6
         indices = np.empty(self.nnz, dtype=np.int32)
         indices[pos.reshape(-1)] = (6 * urow[:, None, None] + _I6 + 0 * _J6).reshape(-1)
         self.indices = indices
         col_start = 36 * bptr[:-1][:, None] + np.arange(6)[None, :] * 6 * count[:, None]
         self.indptr = np.append(col_start.reshape(-1), self.nnz).astype(np.int32)
+        return base[inverse], step[inverse]
+
+    def _kept_structure(self):
+        """The CSC structure of the unknowns (rigid blocks' strain rows and columns left
+        out): which data entries stay, their rows and the columns' starts."""
+        kept = np.zeros(self.n, dtype=bool)
+        kept[self.keep] = True
+        col = np.repeat(np.arange(self.n), np.diff(self.indptr))
+        self._take = np.flatnonzero(kept[self.indices] & kept[col])
+        renumber = np.cumsum(kept) - 1
+        self._kept_indices = renumber[self.indices[self._take]].astype(np.int32)
+        count = np.bincount(renumber[col[self._take]], minlength=self.unknowns)
+        self._kept_indptr = np.concatenate([[0], np.cumsum(count)]).astype(np.int32)
 
     def matrix(self, block_k, pair_k):
-        """The matrix of the unknowns: dense up to ``DENSE_LIMIT`` unknowns, else CSC."""
-        k = self._full_matrix(block_k, pair_k)
+        """The matrix of the unknowns: dense up to ``DENSE_LIMIT`` unknowns, else CSC.
+
+        ``pair_k`` is the contacts' (m, 12, 12) stiffness, or a
+        :class:`dda.kernels.PairStiffness`, which is summed in compiled code without building
+        the array (the same matrix).
+        """
+        if isinstance(pair_k, PairStiffness):
+            data = matrix_data(self.nnz, self.row_step, self.block_base, self.block_step,
+                               np.ascontiguousarray(block_k, dtype=np.float64),
+                               self.free_blocks, self.pair_base, self.pair_step, pair_k.rows,
+                               pair_k.terms, pair_k.weights)
+        else:
+            data = self._full_data(block_k, pair_k)
+        n = self.n
+        if n <= DENSE_LIMIT:
+            k = data.reshape(n, n)
+            return k if self.keep is None else k[np.ix_(self.keep, self.keep)]
         if self.keep is None:
-            return k
-        if isinstance(k, np.ndarray):
-            return k[np.ix_(self.keep, self.keep)]
-        return k[:, self.keep][self.keep, :].tocsc()
+            return sp.csc_matrix((data, self.indices, self.indptr), shape=(n, n))
+        return sp.csc_matrix((data[self._take], self._kept_indices, self._kept_indptr),
+                             shape=(self.unknowns, self.unknowns))
 
     def reduce(self, vector):
         """The entries of a free blocks' vector (6 per block) that are unknowns."""
@@ -116,21 +174,30 @@ class SystemPattern:
         out[self.keep] = solution
         return out
 
-    def _full_matrix(self, block_k, pair_k):
+    @cached_property
+    def _entry_positions(self):
+        """Where each value of the numpy assembly goes in the data (block entries, 36 each)."""
+        base, col_step = self._entry_layout
+        return (base[:, None, None] + _I6 * self.row_step
+                + _J6 * col_step[:, None, None]).reshape(-1)
+
+    def _full_data(self, block_k, pair_k):
+        """The matrix's data from (m, 12, 12) ``pair_k`` in numpy (the reference)."""
         vals = [block_k[self.free_blocks].reshape(-1)]
         for a, b, both, _, _ in self.couplings:
             vals.append(pair_k[both, 6 * a:6 * a + 6, 6 * b:6 * b + 6].reshape(-1))
-        v = np.concatenate(vals)
-        n = self.n
-        if n <= DENSE_LIMIT:
-            return np.bincount(self.dense_index, weights=v, minlength=n * n).reshape(n, n)
-        data = np.bincount(self.slot_of_entry, weights=v, minlength=self.nnz)
-        return sp.csc_matrix((data, self.indices, self.indptr), shape=(n, n))
+        return np.bincount(self._entry_positions, weights=np.concatenate(vals),
+                           minlength=self.nnz)
 
     def rhs(self, block_f, pair_k, pair_f, d_known):
         """The free blocks' right-hand side; contacts with a known block move its increment
-        (times the coupling) to this side."""
+        (times the coupling) to this side (compiled for a :class:`PairStiffness`)."""
         rhs = block_f[self.free_blocks].reshape(-1).copy()
+        if isinstance(pair_k, PairStiffness):
+            return rhs_data(rhs, self.side_row, self.side_block,
+                            np.ascontiguousarray(pair_f, dtype=np.float64),
+                            np.ascontiguousarray(d_known, dtype=np.float64), pair_k.rows,
+                            pair_k.terms, pair_k.weights)
         for a, (fa, index) in enumerate(self.rhs_index):
             rhs += np.bincount(index, weights=pair_f[fa, 6 * a:6 * a + 6].reshape(-1),
                                minlength=self.n)

@@ -1,0 +1,115 @@
+"""The step's matrix and right-hand side summed straight from the contacts' rank-one terms.
+
+:class:`dda.solvers.linear.SystemPattern` lays the matrix out in 6 x 6 blocks and says where
+each goes: entry (i, j) of a block whose entry (0, 0) is at ``base`` lies at
+``base + i row_step + j col_step`` of the matrix's data (``row_step = 1`` and ``col_step`` the
+block column's stride in CSC storage; ``row_step = n`` and ``col_step = 1`` for a dense
+n x n matrix). Contact c couples its blocks a, b in {j, k} by the block ``K_c[6a:6a+6, 6b:6b+6]``
+(:func:`coupling_block`). Values are summed in the order of the numpy assembly (blocks first,
+then coupling (a, b) by coupling, contacts in order), so the two give the same matrix.
+
+The kernels and their helper share this one file: numba's cache (``cache=True``) is renewed
+when the file of the compiled function changes, not when a helper it calls from another file
+does.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["matrix_data", "rhs_data"]
+
+
+@njit(cache=True)
+def coupling_block(out, rows, terms, weights, c, a6, b6):
+    """The 6 x 6 block of contact c's matrix at rows a6.., columns b6.. into ``out``:
+
+        out[i, j] = sum_t w_ct r_c,u(t),a6+i r_c,v(t),b6+j
+
+    summed term by term as :meth:`dda.kernels.PairStiffness.dense` does (the same values).
+    """
+    out[:] = 0.0
+    for t in range(terms.shape[0]):
+        w = weights[c, t]
+        u = rows[c, terms[t, 0], a6:a6 + 6]
+        v = rows[c, terms[t, 1], b6:b6 + 6]
+        for i in range(6):
+            for j in range(6):
+                out[i, j] += w * (u[i] * v[j])
+
+
+@njit(cache=True)
+def matrix_data(nnz, row_step, block_base, block_step, block_k, free_blocks, pair_base,
+                pair_step, rows, terms, weights):
+    """The data of the step's matrix (CSC data or the dense matrix's entries, row major).
+
+    ``data[base_s + i row_step + j col_step_s] += K~_s[i, j]`` for every free block s, then
+    ``data[base_cab + i row_step + j col_step_cab] += K_c[6a + i, 6b + j]`` for every contact
+    c whose blocks a and b are both free (``pair_base[2a + b, c] >= 0``).
+
+    Parameters
+    ----------
+    nnz : length of the data
+    row_step : int, stride of a block's rows in the data
+    block_base, block_step : (n_free,) int, where each free block's 6 x 6 block goes
+    block_k : (n_blocks, 6, 6) the blocks' own matrices
+    free_blocks : (n_free,) int, the blocks with unknowns
+    pair_base, pair_step : (4, m) int, where each contact's coupling (a, b) goes (-1: nowhere)
+    rows, terms, weights : the contacts' rank-one terms (:class:`PairStiffness`)
+    """
+    data = np.zeros(nnz)
+    for s in range(free_blocks.shape[0]):
+        base, step = block_base[s], block_step[s]
+        for i in range(6):
+            for j in range(6):
+                data[base + i * row_step + j * step] += block_k[free_blocks[s], i, j]
+    k = np.empty((6, 6))
+    for ab in range(4):
+        a6, b6 = 6 * (ab // 2), 6 * (ab % 2)
+        for c in range(pair_base.shape[1]):
+            base = pair_base[ab, c]
+            if base < 0:
+                continue
+            step = pair_step[ab, c]
+            coupling_block(k, rows, terms, weights, c, a6, b6)
+            for i in range(6):
+                for j in range(6):
+                    data[base + i * row_step + j * step] += k[i, j]
+    return data
+
+
+@njit(cache=True)
+def rhs_data(rhs, side_row, side_block, pair_f, d_known, rows, terms, weights):
+    """Add the contacts' forces to the free blocks' right-hand side ``rhs`` (in place).
+
+    ``rhs[r_a + i] += f_c[6a + i]`` for each side a of contact c whose block is free (its rows
+    start at ``r_a = side_row[a, c] >= 0``), and, for a side b whose block is known,
+    ``rhs[r_a + i] -= sum_j K_c[6a + i, 6b + j] d_known[side_block[b, c], j]``.
+    """
+    part = np.empty(rhs.shape[0])
+    for a in range(2):
+        part[:] = 0.0
+        for c in range(side_row.shape[1]):
+            r = side_row[a, c]
+            if r >= 0:
+                for i in range(6):
+                    part[r + i] += pair_f[c, 6 * a + i]
+        rhs += part
+    k = np.empty((6, 6))
+    for ab in range(4):
+        a, b = ab // 2, ab % 2
+        part[:] = 0.0
+        for c in range(side_row.shape[1]):
+            r = side_row[a, c]
+            if r < 0 or side_row[b, c] >= 0:
+                continue
+            known = side_block[b, c]
+            coupling_block(k, rows, terms, weights, c, 6 * a, 6 * b)
+            for i in range(6):
+                load = 0.0
+                for j in range(6):
+                    load += k[i, j] * d_known[known, j]
+                part[r + i] += load
+        rhs -= part
+    return rhs
