@@ -168,6 +168,7 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
                           d_known=d_known, element=element,
                           max_open_close=settings.max_open_close, rigid=model.rigid)
+    _reuse_pattern(model, problem)
     sol = solver.solve_step(problem)
     costs = (problem.pattern.unknowns, found.n_pairs)
     if not sol.converged:
@@ -191,6 +192,15 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     return trial, report
 
 
+def _reuse_pattern(model, problem) -> None:
+    """Give ``problem`` the system pattern of an earlier step with the same contacts' block
+    pairs (it depends on them and on the model's free and rigid blocks alone), or keep the
+    one it builds for the steps after."""
+    el = problem.element
+    key = ("pattern", el.bj.tobytes(), el.bk.tobytes())
+    problem.pattern = model.memo.get(key, lambda: problem.pattern)
+
+
 def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0) -> float:
     """How far from a vertex contacts are looked for in a step (m).
 
@@ -205,7 +215,7 @@ def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0
     predicted += 0.5 * abs(model.gravity or 0.0) * dt * dt
     if len(known_du):
         predicted = max(predicted, float(np.max(np.hypot(known_du[:, 0], known_du[:, 1]))))
-    floor = 1e-6 * float(np.min(model.size))
+    floor = 1e-6 * model.min_size
     return SEARCH_FACTOR * max(predicted, state.last_move, search_hint) + floor
 
 
@@ -221,14 +231,14 @@ def _detect(model, state, d0, tolerance) -> _Detected:
     # distance; detection takes a negative gap only for a vertex inside the edge's block, so
     # no far edge of a thin block is taken for a contact (soft penalties let contacts sink
     # further than a fixed limit, and a closed contact must never be lost)
-    pen_limit = max(2.0 * d0, 1e-3 * float(np.min(model.size)),
+    pen_limit = max(2.0 * d0, 1e-3 * model.min_size,
                     2.0 * max(deepest_spring(model, state.contacts), state.penetration) + d0)
     topo = model.topo
     if model.n_blocks > 1:
         with section("detection"):
             # a vertex sunk deeper than a quarter of the guard's tolerance is held by the
             # edge nearest to it, and two such corners get a spring each
-            sunk = 0.25 * tolerance * float(np.min(model.thickness))
+            sunk = 0.25 * tolerance * model.min_thickness
             pairs = _pairs(model, state.x, max(d0, pen_limit))
             cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk)
             contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt,
@@ -255,13 +265,17 @@ def _element(model, state, found: _Detected, centroid) -> ContactElement:
     (new and open contacts get their law's initial history)."""
     contacts = found.contacts
     joint = model.joint_index(contacts.bj, contacts.bk)
-    if np.any(joint < 0):
+    if model.joints.default < 0 and np.any(joint < 0):
         i = int(np.flatnonzero(joint < 0)[0])
         raise SimulationError(
             f"no joint between {model.block_label(contacts.bj[i])} and "
             f"{model.block_label(contacts.bk[i])}; set a default joint"
         )
-    laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
+    if len(model.joints.laws) == 1:  # one law: LawGroups.build's groups without the sort
+        m = len(contacts)
+        laws = LawGroups([(model.joints.laws[0], np.arange(m))] if m else [])
+    else:
+        laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
     laws.initial_history(contacts.history, found.fresh)
     return ContactElement(contacts, state.x, centroid, model.topo.nxt, model.topo.prv,
                           model.joints.normal_penalty[joint],
@@ -278,8 +292,7 @@ def _check_moves(model, move, d0, max_ratio):
     if 2.0 * largest > d0:
         return (f"a vertex moved {largest:.3g} m, more than half the contact search "
                 f"distance {d0:.3g} m", 2.0 * largest)
-    per_block = np.zeros(model.n_blocks)
-    np.maximum.at(per_block, model.topo.block, distance)
+    per_block = np.maximum.reduceat(distance, model.offsets[:-1])
     ratio = np.where(model.free, per_block / model.size, 0.0)
     worst = int(np.argmax(ratio))
     if ratio[worst] > max_ratio:
