@@ -66,7 +66,7 @@ class Memo:
 
     __slots__ = ("entries", "size")
 
-    def __init__(self, size: int = 4):
+    def __init__(self, size: int = 8):
         self.entries: dict = {}
         self.size = size
 
@@ -426,8 +426,8 @@ def _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth)
     # once per (vertex, block), not per edge
     nb = len(topo.offsets)
     key, first, back = _groups(vertex[behind] * nb + topo.block[edge[behind]])
-    inside, depth, _ = inside_depth(frame.p1[behind[first]], key % nb, x, topo.offsets,
-                                    topo.nxt, nearest=False)
+    inside, depth, _ = _inside_depth(frame.p1[behind[first]], key % nb, x, topo,
+                                     nearest=False)
     inside, depth = inside[back], depth[back]
     # on the boundary (within round-off of an edge) is neither in nor out: a corner of a
     # block sitting on an equal-width one lies on the lower block's side line
@@ -450,8 +450,12 @@ def _one_edge_per_block(c: _Candidates, topo, gap, length, reflex) -> _Candidate
     """One edge per (vertex, block): the one the vertex is least deep behind (the signed
     distance to a convex block is the largest of the gaps to its edges' lines), then one
     whose foot is on it, then the best opposed; and across a reflex corner the other edge.
-    ``reflex`` says which vertices are reflex (:meth:`VertexTopology.reflex`)."""
-    _, first_of, group = _groups(c.vertex * len(topo.offsets) + c.kblock)
+    ``reflex`` says which vertices are reflex (:meth:`VertexTopology.reflex`). The result is
+    sorted by vertex, then block."""
+    key = c.vertex * len(topo.offsets) + c.kblock
+    uniq, first_of, group = _groups(key)
+    if len(uniq) == len(key):  # one edge each already: nothing to choose, only the order
+        return c.take(first_of)
     best = np.full(len(first_of), -np.inf)
     np.maximum.at(best, group, gap)
     least_deep = gap >= best[group] - _GAP_TIE * length
@@ -504,19 +508,37 @@ def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.n
     if len(p) == 0:
         z = np.zeros(0, dtype=np.int64)
         return np.zeros(0, dtype=bool), np.zeros(0), z
-    pid, edge, counts, starts = _edge_runs(kblock, offsets)
+    pid, edge, _, starts = _edge_runs(kblock, offsets)
+    return _inside_depth_of_runs(p, x, pid, edge, nxt[edge], starts, nearest)
+
+
+def _inside_depth(p, kblock, x, topo: VertexTopology, nearest: bool = True):
+    """:func:`inside_depth` with the edge runs of ``kblock`` kept in ``topo.memo``."""
+    if len(p) == 0:
+        return inside_depth(p, kblock, x, topo.offsets, topo.nxt, nearest)
+
+    def make():
+        pid, edge, _, starts = _edge_runs(kblock, topo.offsets, topo.counts)
+        return pid, edge, topo.nxt[edge], starts
+
+    runs = topo.memo.get(("edge-runs", kblock.tobytes()), make)
+    return _inside_depth_of_runs(p, x, *runs, nearest)
+
+
+def _inside_depth_of_runs(p, x, pid, edge, edge_end, starts, nearest):
     q = p[pid]
     a = x[edge]
-    b = x[nxt[edge]]
+    b = x[edge_end]
     ab = b - a
+    qa = q - a
     # compare the end points themselves: a + (b - a) need not be b in floating point, and a
     # ray through a vertex would then count it twice or not at all
     straddles = (a[:, 1] > q[:, 1]) != (b[:, 1] > q[:, 1])
     dy = np.where(straddles, ab[:, 1], 1.0)
-    crossing = straddles & (q[:, 0] < a[:, 0] + (q[:, 1] - a[:, 1]) * ab[:, 0] / dy)
+    crossing = straddles & (q[:, 0] < a[:, 0] + qa[:, 1] * ab[:, 0] / dy)
     len2 = np.einsum("ij,ij->i", ab, ab)
-    t = np.minimum(np.maximum(np.einsum("ij,ij->i", q - a, ab) / np.maximum(len2, 1e-300),
-                              0.0), 1.0)
+    t = np.minimum(np.maximum(np.einsum("ij,ij->i", qa, ab) / np.maximum(len2, 1e-300), 0.0),
+                   1.0)
     dist = np.hypot(*(q - (a + t[:, None] * ab)).T)
     inside = np.bitwise_xor.reduceat(crossing, starts)  # an odd number of crossings
     depth = np.minimum.reduceat(dist, starts)

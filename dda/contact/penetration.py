@@ -25,9 +25,9 @@ from dda.contact.contacts import OPEN
 from dda.contact.detection import (
     VertexTopology,
     _directed_vertex_block_pairs,
+    _inside_depth,
     bounding_boxes,
     broad_phase,
-    inside_depth,
 )
 
 __all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
@@ -100,7 +100,7 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
     vertex, kblock = vertex[corner], kblock[corner]
     if len(vertex) == 0:
         return _empty()
-    inside, depth, nearest = inside_depth(x[vertex], kblock, x, offsets, topo.nxt)
+    inside, depth, nearest = _inside_depth(x[vertex], kblock, x, topo)
     keep = inside & (depth > min_depth)
     return Penetrations(vertex[keep], kblock[keep], depth[keep], nearest[keep])
 
