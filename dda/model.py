@@ -206,7 +206,7 @@ class Model:
     def spring_depths(self, contacts: ContactSet):
         """The closed contacts of ``contacts`` (indices), how deep their springs sink
         (``-t_n / p_n``, m) and their normal penalties."""
-        closed = np.flatnonzero(contacts.state != 0)
+        closed = (contacts.state != 0).nonzero()[0]
         pn = self.joints.normal_penalty[self.joint_index(contacts.bj[closed],
                                                          contacts.bk[closed])]
         return closed, -contacts.t_n[closed] / pn, pn

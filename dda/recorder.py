@@ -48,7 +48,7 @@ def pair_forces(model, state):
     """Per block pair with closed contacts: its :func:`dda.contact.contacts.pair_key`, the
     total force on the higher-index block, and the normal weighted by the normal forces."""
     c = state.contacts
-    closed = np.flatnonzero(c.state != OPEN)
+    closed = (c.state != OPEN).nonzero()[0]
     if len(closed) == 0:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2))
     # the contacted edges' frames (as contact_geometry has them: P2 = next(e), P3 = e)

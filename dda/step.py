@@ -211,17 +211,17 @@ def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0
     """
     t = geometry.t_matrix(state.x, centroid[model.topo.block])
     vv = np.einsum("vij,vj->vi", t, state.velocity[model.topo.block] * carry)
-    predicted = np.max(np.hypot(vv[:, 0], vv[:, 1])) * dt if len(vv) else 0.0
+    predicted = np.hypot(vv[:, 0], vv[:, 1]).max() * dt if len(vv) else 0.0
     predicted += 0.5 * abs(model.gravity or 0.0) * dt * dt
     if len(known_du):
-        predicted = max(predicted, float(np.max(np.hypot(known_du[:, 0], known_du[:, 1]))))
+        predicted = max(predicted, float(np.hypot(known_du[:, 0], known_du[:, 1]).max()))
     floor = 1e-6 * model.min_size
     return SEARCH_FACTOR * max(predicted, state.last_move, search_hint) + floor
 
 
 def deepest_spring(model, contacts) -> float:
     """Deepest penetration of the committed closed springs (m)."""
-    return float(np.max(model.spring_depths(contacts)[1], initial=0.0))
+    return float(np.maximum.reduce(model.spring_depths(contacts)[1], initial=0.0))
 
 
 def _detect(model, state, d0, tolerance) -> _Detected:
@@ -285,7 +285,7 @@ def _element(model, state, found: _Detected, centroid) -> ContactElement:
 def _check_moves(model, move, d0, max_ratio):
     """None when the step's moves are acceptable, else ``(reason, search hint)``."""
     distance = np.hypot(move[:, 0], move[:, 1])
-    largest = float(np.max(distance))
+    largest = float(distance.max())
     # two blocks closing on each other close their gap by up to twice the largest move: a
     # vertex that moved more than half the search distance may have met an edge that was
     # not searched

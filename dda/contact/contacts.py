@@ -75,8 +75,8 @@ def _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom):
     """A closed contact whose vertex is now found on the adjacent edge of the same block
     moves there: its source row goes into ``src`` and its shear reference into ``xi0`` (in
     place), placed so that g_s is the same on the new edge as on the old."""
-    closed_old = np.flatnonzero(old.state != OPEN)
-    miss = np.flatnonzero(~hit)
+    closed_old = (old.state != OPEN).nonzero()[0]
+    miss = (~hit).nonzero()[0]
     if not (len(closed_old) and len(miss)):
         return
     key2 = old.vertex[closed_old] * n_blocks + old.bk[closed_old]
@@ -133,7 +133,7 @@ def carry_over(
         hit = sorted_key[pos] == new_key
         src = np.where(hit, order[pos], -1)
         _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom)
-        carried = np.flatnonzero(src >= 0)
+        carried = (src >= 0).nonzero()[0]
         from_old = src[carried]
         state[carried] = old.state[from_old]
         t_n[carried] = old.t_n[from_old]

@@ -328,7 +328,7 @@ def narrow_phase(
     on_edge = (frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL)
     ok, sunk = _within_reach(x, topo, vertex, edge, frame, on_edge, search_distance,
                              penetration_limit, sunk_depth)
-    row = np.flatnonzero(ok)
+    row = ok.nonzero()[0]
     if len(row) == 0:
         return _empty_candidates(len(pairs))
     v = vertex[row]
@@ -418,7 +418,7 @@ def _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth)
     # a vertex behind an edge's line is in contact with it only when it is inside the
     # block: beyond a thin block's far side it is behind the near edge's line too (gaps
     # within round-off of zero are left alone: touching is neither inside nor out)
-    behind = np.flatnonzero(ok & (gap < -_GAP_TIE * frame.length))
+    behind = (ok & (gap < -_GAP_TIE * frame.length)).nonzero()[0]
     sunk = np.zeros(len(ok), dtype=bool)
     reach = np.full(len(ok), search_distance)
     if len(behind) == 0:
@@ -479,7 +479,7 @@ def _drop_mirrored(c: _Candidates, x, topo, reach) -> _Candidates:
     vv = _norm(c.p1 - x[near_end]) <= reach
     if not vv.any():
         return c
-    idx = np.flatnonzero(vv)
+    idx = vv.nonzero()[0]
     a = np.minimum(vertex[idx], near_end[idx])
     b = np.maximum(vertex[idx], near_end[idx])
     order = np.lexsort((vertex[idx], -c.score[idx], ~c.on_edge[idx], b, a))
@@ -545,7 +545,7 @@ def _inside_depth_of_runs(p, x, pid, edge, edge_end, starts, nearest):
     if not nearest:
         return inside, depth, None
     # the nearest edge: the first of its run at the run's least distance
-    idx = np.flatnonzero(dist == depth[pid])
+    idx = (dist == depth[pid]).nonzero()[0]
     first = np.ones(len(idx), dtype=bool)
     first[1:] = pid[idx[1:]] != pid[idx[:-1]]
     near = np.empty(len(p), dtype=np.int64)

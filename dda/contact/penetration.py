@@ -126,7 +126,7 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
     if len(pen) == 0:
         return np.zeros(0)
     c = contacts
-    closed = np.flatnonzero(c.state != OPEN)
+    closed = (c.state != OPEN).nonzero()[0]
     if len(closed) == 0:
         return pen.depth.copy()
     spring = -c.t_n[closed] / normal_penalty[closed]
@@ -154,7 +154,7 @@ def _gather(keys, values, want, reduce) -> np.ndarray:
     head = np.empty(len(keys), dtype=bool)
     head[:1] = True
     np.not_equal(keys[1:], keys[:-1], out=head[1:])
-    start = np.flatnonzero(head)
+    start = head.nonzero()[0]
     uniq = keys[start]
     total = reduce.reduceat(values, start)
     pos = np.minimum(np.searchsorted(uniq, want), len(uniq) - 1)
@@ -196,13 +196,14 @@ def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
         return GuardReport()
     pen = vertex_penetrations(x_new, model.topo, pairs=pairs)
     closed = contacts.state != OPEN
-    spring = float(np.max(-contacts.t_n[closed] / normal_penalty[closed], initial=0.0))
+    spring = float(np.maximum.reduce(-contacts.t_n[closed] / normal_penalty[closed],
+                                      initial=0.0))
     if len(pen) == 0:
         return GuardReport("", pen.deepest, spring)
     tol = tolerance * np.minimum(model.thickness[model.topo.block[pen.vertex]],
                                  model.thickness[pen.block])
     ratio = untracked_depth(pen, contacts, normal_penalty, model.topo) / tol
-    untracked = float(np.max(ratio))
+    untracked = float(ratio.max())
     if not (ratio > 1.0).any():
         return GuardReport("", pen.deepest, spring, untracked)
     i = int(np.argmax(ratio))
