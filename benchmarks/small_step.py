@@ -1,6 +1,7 @@
 """The fixed cost of one step on a 2-block scene (issue 19): a block sliding down an incline.
 
-Run:  python benchmarks/small_step.py [--steps N] [--warmup N] [--calls] [--profile K]
+Run:  python benchmarks/small_step.py [--steps N] [--warmup N] [--record-every N] [--calls]
+                                      [--profile K]
 
 For both solvers it prints, after a warm-up run:
 
@@ -50,9 +51,9 @@ def incline(slope=30.0, phi=30.0, kick=1.0):
     return scene
 
 
-def measure(solver, steps, warmup, dt=1e-4):
+def measure(solver, steps, warmup, dt=1e-4, record_every=1):
     """(step median, loop per step, cpu per step) in seconds, and the simulation."""
-    sim = dda.Simulation(incline(), dt=dt, solver=solver)
+    sim = dda.Simulation(incline(), dt=dt, solver=solver, record_every=record_every)
     sim.run(duration=warmup * dt, progress=False)
     t0, c0 = time.perf_counter(), time.process_time()
     result = sim.run(duration=steps * dt, progress=False)
@@ -81,13 +82,17 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=3000)
     ap.add_argument("--warmup", type=int, default=200)
+    ap.add_argument("--record-every", type=int, default=1,
+                    help="record every this many steps (default: every step, as a run does)")
     ap.add_argument("--calls", action="store_true", help="count the Python calls per step")
     ap.add_argument("--profile", type=int, default=0, metavar="K",
                     help="print the K functions with the most own time")
     args = ap.parse_args(argv)
-    print(f"2-block incline, dt 1e-4, {args.steps} steps after {args.warmup} of warm-up")
+    print(f"2-block incline, dt 1e-4, {args.steps} steps after {args.warmup} of warm-up, "
+          f"recording every {args.record_every}")
     for make in (dda.solvers.LegacyPullBack, dda.solvers.NewtonRaphson):
-        step, loop, cpu, sim = measure(make(), args.steps, args.warmup)
+        step, loop, cpu, sim = measure(make(), args.steps, args.warmup,
+                                       record_every=args.record_every)
         line = (f"{sim.solver.name:7s} step {1e6 * step:7.1f} us  loop {1e6 * loop:7.1f} us  "
                 f"cpu {1e6 * cpu:7.1f} us  (x {SEED_STEPS:,}: {loop * SEED_STEPS:5.0f} s)")
         if args.calls or args.profile:
