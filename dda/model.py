@@ -14,7 +14,7 @@ import numpy as np
 
 from dda import geometry
 from dda.contact.contacts import ContactSet, pair_key
-from dda.contact.detection import VertexTopology
+from dda.contact.detection import Memo, VertexTopology
 from dda.contact.friction import FrictionLaw
 from dda.scene import Scene
 
@@ -96,6 +96,7 @@ class Model:
     x_initial, centroid_initial : vertices and block centroids at the start
     size : (n_blocks,) square root of each block's area at the start (a length scale)
     thickness : (n_blocks,) ``2 area / perimeter`` at the start: half a square's side
+    min_size, min_thickness : the smallest of each
     density, elasticity : (n_blocks,) and (n_blocks, 3, 3) material data
     free : (n_blocks,) True for the blocks that carry unknowns (not fixed, shaken or moved)
     rigid : (n_blocks,) bool of the blocks without strain unknowns, or None when none is
@@ -133,6 +134,8 @@ class Model:
         edges = x0[self.topo.nxt] - x0
         perimeter = np.add.reduceat(np.hypot(edges[:, 0], edges[:, 1]), offsets[:-1])
         self.thickness = 2.0 * ints.area / perimeter
+        self.min_size = float(np.min(self.size))
+        self.min_thickness = float(np.min(self.thickness))
         self.density = np.array([b.material.density for b in blocks])
         self.elasticity = np.stack([b.material.elasticity() for b in blocks])
         young = np.array([b.material.young for b in blocks])
@@ -154,6 +157,16 @@ class Model:
         self.joints = JointTable.from_scene(scene, nb)
         self._compile_loads(scene.point_loads)
         self._compile_springs(x0)
+        # what a step derives from the contacts' block pairs alone, kept while they stay
+        self.memo = Memo(size=2)
+
+    def __setstate__(self, state):
+        self.__dict__.update(state)
+        # a model pickled before these were kept (a checkpoint of an earlier version)
+        if "memo" not in state:
+            self.min_size = float(np.min(self.size))
+            self.min_thickness = float(np.min(self.thickness))
+            self.memo = Memo(size=2)
 
     def _compile_loads(self, loads):
         self.load_initial = np.array([ld.point for ld in loads]).reshape(-1, 2)
@@ -186,12 +199,14 @@ class Model:
 
     def joint_index(self, bj: np.ndarray, bk: np.ndarray) -> np.ndarray:
         """Row of :attr:`joints` of the joint between blocks bj and bk (-1 where none)."""
+        if not len(self.joints.pair_keys):  # one joint for every pair
+            return np.full(len(bj), self.joints.default, dtype=np.int64)
         return self.joints.index(pair_key(bj, bk, self.n_blocks))
 
     def spring_depths(self, contacts: ContactSet):
         """The closed contacts of ``contacts`` (indices), how deep their springs sink
         (``-t_n / p_n``, m) and their normal penalties."""
-        closed = np.flatnonzero(contacts.state != 0)
+        closed = (contacts.state != 0).nonzero()[0]
         pn = self.joints.normal_penalty[self.joint_index(contacts.bj[closed],
                                                          contacts.bk[closed])]
         return closed, -contacts.t_n[closed] / pn, pn

@@ -40,12 +40,13 @@ _active: ContextVar[StepProfile | None] = ContextVar("dda_step_profile", default
 class StepProfile:
     """Seconds per section and the number of linear solves of one step (retries included)."""
 
-    __slots__ = ("seconds", "solves", "_nested")
+    __slots__ = ("seconds", "solves", "_nested", "_starts")
 
     def __init__(self):
         self.seconds = dict.fromkeys(SECTIONS, 0.0)
         self.solves = 0
-        self._nested: list[float] = []
+        self._nested: list[float] = []  # per open section: the time of the sections in it
+        self._starts: list[float] = []  # per open section: when it started
 
     def active(self):
         """Context manager that makes this profile the one sections report to."""
@@ -68,22 +69,24 @@ class _Activation:
 
 
 class _Section:
-    __slots__ = ("name", "profile", "start")
+    """One per section name, shared: what an open section needs lives in the profile."""
+
+    __slots__ = ("name",)
 
     def __init__(self, name):
         self.name = name
 
     def __enter__(self):
-        self.profile = _active.get()
-        if self.profile is not None:
-            self.profile._nested.append(0.0)
-            self.start = perf_counter()
+        p = _active.get()
+        if p is not None:
+            p._nested.append(0.0)
+            p._starts.append(perf_counter())
         return self
 
     def __exit__(self, *exc):
-        p = self.profile
-        if p is not None:
-            elapsed = perf_counter() - self.start
+        p = _active.get()
+        if p is not None and p._starts:  # (not when the profile came in within the section)
+            elapsed = perf_counter() - p._starts.pop()
             inner = p._nested.pop()
             p.seconds[self.name] += elapsed - inner
             if p._nested:
@@ -105,9 +108,11 @@ def section(name: str) -> _Section:
     >>> p.seconds["assembly"] >= 0.0 and p.seconds["solve"] >= 0.0
     True
     """
-    if name not in _SECTION_SET:
-        raise ValueError(f"section: unknown section {name!r}; there are {', '.join(SECTIONS)}")
-    return _Section(name)
+    try:
+        return _SECTION_OF[name]
+    except KeyError:
+        raise ValueError(f"section: unknown section {name!r}; there are "
+                         f"{', '.join(SECTIONS)}") from None
 
 
 def count_solve() -> None:
@@ -117,4 +122,4 @@ def count_solve() -> None:
         p.solves += 1
 
 
-_SECTION_SET = frozenset(SECTIONS)
+_SECTION_OF = {name: _Section(name) for name in SECTIONS}

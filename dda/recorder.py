@@ -12,6 +12,7 @@ import numpy as np
 
 from dda import geometry
 from dda.contact.contacts import OPEN, pair_key
+from dda.contact.detection import _groups
 from dda.contact.kinematics import contact_geometry
 from dda.result import Frame
 
@@ -47,18 +48,24 @@ def pair_forces(model, state):
     """Per block pair with closed contacts: its :func:`dda.contact.contacts.pair_key`, the
     total force on the higher-index block, and the normal weighted by the normal forces."""
     c = state.contacts
-    closed = np.flatnonzero(c.state != OPEN)
+    closed = (c.state != OPEN).nonzero()[0]
     if len(closed) == 0:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2))
-    g = contact_geometry(state.x, c.vertex[closed], c.edge[closed], model.topo.nxt)
+    # the contacted edges' frames (as contact_geometry has them: P2 = next(e), P3 = e)
+    edge = c.edge[closed]
+    d = state.x[edge] - state.x[model.topo.nxt[edge]]
+    tau = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    g_normal = np.empty_like(tau)
+    np.negative(tau[:, 1], out=g_normal[:, 0])
+    g_normal[:, 1] = tau[:, 0]
     bj, bk = c.bj[closed], c.bk[closed]
     t_n, t_s = c.t_n[closed], c.t_s[closed]
-    on_j = -(t_n[:, None] * g.normal + t_s[:, None] * g.tau)
+    on_j = -(t_n[:, None] * g_normal + t_s[:, None] * tau)
     j_high = bj > bk
     sign = np.where(j_high, 1.0, -1.0)[:, None]
     force = sign * on_j
-    normal = sign * g.normal * np.abs(t_n)[:, None]
-    keys, inv = np.unique(pair_key(bj, bk, model.n_blocks), return_inverse=True)
+    normal = sign * g_normal * np.abs(t_n)[:, None]
+    keys, _, inv = _groups(pair_key(bj, bk, model.n_blocks))
     f = np.zeros((len(keys), 2))
     n = np.zeros((len(keys), 2))
     np.add.at(f, inv, force)

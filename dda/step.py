@@ -202,17 +202,17 @@ def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0
     """
     t = geometry.t_matrix(state.x, centroid[model.topo.block])
     vv = np.einsum("vij,vj->vi", t, state.velocity[model.topo.block] * carry)
-    predicted = np.max(np.hypot(vv[:, 0], vv[:, 1])) * dt if len(vv) else 0.0
+    predicted = np.hypot(vv[:, 0], vv[:, 1]).max() * dt if len(vv) else 0.0
     predicted += 0.5 * abs(model.gravity or 0.0) * dt * dt
     if len(known_du):
-        predicted = max(predicted, float(np.max(np.hypot(known_du[:, 0], known_du[:, 1]))))
-    floor = 1e-6 * float(np.min(model.size))
+        predicted = max(predicted, float(np.hypot(known_du[:, 0], known_du[:, 1]).max()))
+    floor = 1e-6 * model.min_size
     return SEARCH_FACTOR * max(predicted, state.last_move, search_hint) + floor
 
 
 def deepest_spring(model, contacts) -> float:
     """Deepest penetration of the committed closed springs (m)."""
-    return float(np.max(model.spring_depths(contacts)[1], initial=0.0))
+    return float(np.maximum.reduce(model.spring_depths(contacts)[1], initial=0.0))
 
 
 def _detect(model, state, d0, tolerance) -> _Detected:
@@ -222,14 +222,14 @@ def _detect(model, state, d0, tolerance) -> _Detected:
     # distance; detection takes a negative gap only for a vertex inside the edge's block, so
     # no far edge of a thin block is taken for a contact (soft penalties let contacts sink
     # further than a fixed limit, and a closed contact must never be lost)
-    pen_limit = max(2.0 * d0, 1e-3 * float(np.min(model.size)),
+    pen_limit = max(2.0 * d0, 1e-3 * model.min_size,
                     2.0 * max(deepest_spring(model, state.contacts), state.penetration) + d0)
     topo = model.topo
     if model.n_blocks > 1:
         with section("detection"):
             # a vertex sunk deeper than a quarter of the guard's tolerance is held by the
             # edge nearest to it, and two such corners get a spring each
-            sunk = 0.25 * tolerance * float(np.min(model.thickness))
+            sunk = 0.25 * tolerance * model.min_thickness
             pairs = _pairs(model, state.x, max(d0, pen_limit))
             cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk)
             contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt,
@@ -256,13 +256,17 @@ def _element(model, state, found: _Detected, centroid) -> ContactElement:
     (new and open contacts get their law's initial history)."""
     contacts = found.contacts
     joint = model.joint_index(contacts.bj, contacts.bk)
-    if np.any(joint < 0):
+    if model.joints.default < 0 and np.any(joint < 0):
         i = int(np.flatnonzero(joint < 0)[0])
         raise SimulationError(
             f"no joint between {model.block_label(contacts.bj[i])} and "
             f"{model.block_label(contacts.bk[i])}; set a default joint"
         )
-    laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
+    if len(model.joints.laws) == 1:  # one law: LawGroups.build's groups without the sort
+        m = len(contacts)
+        laws = LawGroups([(model.joints.laws[0], np.arange(m))] if m else [])
+    else:
+        laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
     laws.initial_history(contacts.history, found.fresh)
     return ContactElement(contacts, state.x, centroid, model.topo.nxt, model.topo.prv,
                           model.joints.normal_penalty[joint],
@@ -272,15 +276,14 @@ def _element(model, state, found: _Detected, centroid) -> ContactElement:
 def _check_moves(model, move, d0, max_ratio):
     """None when the step's moves are acceptable, else ``(reason, search hint)``."""
     distance = np.hypot(move[:, 0], move[:, 1])
-    largest = float(np.max(distance))
+    largest = float(distance.max())
     # two blocks closing on each other close their gap by up to twice the largest move: a
     # vertex that moved more than half the search distance may have met an edge that was
     # not searched
     if 2.0 * largest > d0:
         return (f"a vertex moved {largest:.3g} m, more than half the contact search "
                 f"distance {d0:.3g} m", 2.0 * largest)
-    per_block = np.zeros(model.n_blocks)
-    np.maximum.at(per_block, model.topo.block, distance)
+    per_block = np.maximum.reduceat(distance, model.offsets[:-1])
     ratio = np.where(model.free, per_block / model.size, 0.0)
     worst = int(np.argmax(ratio))
     if ratio[worst] > max_ratio:

@@ -75,14 +75,14 @@ def _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom):
     """A closed contact whose vertex is now found on the adjacent edge of the same block
     moves there: its source row goes into ``src`` and its shear reference into ``xi0`` (in
     place), placed so that g_s is the same on the new edge as on the old."""
-    closed_old = np.flatnonzero(old.state != OPEN)
-    miss = np.flatnonzero(~hit)
+    closed_old = (old.state != OPEN).nonzero()[0]
+    miss = (~hit).nonzero()[0]
     if not (len(closed_old) and len(miss)):
         return
     key2 = old.vertex[closed_old] * n_blocks + old.bk[closed_old]
     o2 = np.argsort(key2)
     want = new.vertex[miss] * n_blocks + new.bk[miss]
-    p2 = np.clip(np.searchsorted(key2[o2], want), 0, len(o2) - 1)
+    p2 = np.minimum(np.searchsorted(key2[o2], want), len(o2) - 1)
     found = key2[o2][p2] == want
     cand = closed_old[o2[p2]]
     adjacent = (nxt[old.edge[cand]] == new.edge[miss]) | (prv[old.edge[cand]] == new.edge[miss])
@@ -121,25 +121,27 @@ def carry_over(
     t_n = np.zeros(m)
     t_s = np.zeros(m)
     history = {k: np.zeros(m) for k in old.history}
-    geom = contact_geometry(x, new.vertex, new.edge, nxt)
-    src = np.full(m, -1, dtype=np.int64)
-    if len(old):
+    geom = new.geometry
+    if geom is None:
+        geom = contact_geometry(x, new.vertex, new.edge, nxt)
+    if len(old) and m:
         old_key = old.vertex * n_v + old.edge
         order = np.argsort(old_key)
+        sorted_key = old_key[order]
         new_key = new.vertex * n_v + new.edge
-        pos = np.clip(np.searchsorted(old_key[order], new_key), 0, len(old) - 1)
-        hit = old_key[order][pos] == new_key
-        src[hit] = order[pos[hit]]
+        pos = np.minimum(np.searchsorted(sorted_key, new_key), len(old) - 1)
+        hit = sorted_key[pos] == new_key
+        src = np.where(hit, order[pos], -1)
         _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom)
-        carried = src >= 0
-        state[carried] = old.state[src[carried]]
-        t_n[carried] = old.t_n[src[carried]]
-        t_s[carried] = old.t_s[src[carried]]
-        same = carried.copy()
-        same[src >= 0] = old.edge[src[carried]] == new.edge[carried]
+        carried = (src >= 0).nonzero()[0]
+        from_old = src[carried]
+        state[carried] = old.state[from_old]
+        t_n[carried] = old.t_n[from_old]
+        t_s[carried] = old.t_s[from_old]
+        same = carried[old.edge[from_old] == new.edge[carried]]
         xi0[same] = old.xi0[src[same]]
         for k in history:
-            history[k][carried] = old.history[k][src[carried]]
+            history[k][carried] = old.history[k][from_old]
     fresh = state == OPEN
     # an open contact's shear reference follows the foot until it closes
     xi0[fresh] = geom.xi[fresh]

@@ -40,10 +40,11 @@ other block deeper than ``sunk_depth`` (corners sunk into each other).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
-from dda.contact.kinematics import contact_geometry
+from dda.contact.kinematics import ContactGeometry, contact_geometry
 from dda.geometry import next_vertex_index, polygon_integrals
 
 __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts",
@@ -53,6 +54,33 @@ ENTRANCE_TOLERANCE_DEG = 20.0
 _XI_TOL = 1e-9
 # gaps to two edges within this fraction of the edge length are a tie (round-off)
 _GAP_TIE = 1e-9
+
+
+class Memo:
+    """The last few results of pure functions of arrays, by the arrays' bytes.
+
+    A scene's block pairs, and the vertex rows they give, change seldom from one step to the
+    next: what is derived from them alone is kept here, in the topology it belongs to. Copies
+    and pickles (checkpoints) start empty.
+    """
+
+    __slots__ = ("entries", "size")
+
+    def __init__(self, size: int = 8):
+        self.entries: dict = {}
+        self.size = size
+
+    def __reduce__(self):
+        return (Memo, (self.size,))
+
+    def get(self, key, make):
+        """The result for ``key``, made by ``make()`` when it is not kept."""
+        hit = self.entries.get(key)
+        if hit is None:
+            if len(self.entries) >= self.size:
+                self.entries.pop(next(iter(self.entries)))
+            hit = self.entries[key] = make()
+        return hit
 
 
 @dataclass(frozen=True)
@@ -73,18 +101,30 @@ class VertexTopology:
         block = np.repeat(np.arange(len(counts)), counts)
         return cls(offsets=offsets, block=block, nxt=nxt, prv=prv)
 
-    def _turn(self, x: np.ndarray):
-        """The arms a = prev - v and b = next - v of every vertex, the cross product a x b
-        and its round-off scale |a| |b|."""
-        a = x[self.prv] - x
-        b = x[self.nxt] - x
+    @cached_property
+    def counts(self) -> np.ndarray:
+        """(n_blocks,) vertices (and edges) of every block."""
+        return np.diff(self.offsets)
+
+    @cached_property
+    def memo(self) -> Memo:
+        """Results derived from the block pairs alone, kept from step to step."""
+        return Memo()
+
+    def _turn(self, x: np.ndarray, index=None):
+        """The arms a = prev - v and b = next - v of every vertex (or of ``index``), the
+        cross product a x b and its round-off scale |a| |b|."""
+        v = slice(None) if index is None else index
+        p = x if index is None else x[index]
+        a = x[self.prv[v]] - p
+        b = x[self.nxt[v]] - p
         cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
         return a, b, cross, np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
 
-    def straight(self, x: np.ndarray) -> np.ndarray:
-        """Whether each vertex lies on the straight line of its two edges (to round-off): a
-        point of a side, not a corner."""
-        a, b, cross, scale = self._turn(x)
+    def straight(self, x: np.ndarray, index=None) -> np.ndarray:
+        """Whether each vertex (or each of ``index``) lies on the straight line of its two
+        edges (to round-off): a point of a side, not a corner."""
+        a, b, cross, scale = self._turn(x, index)
         return (np.abs(cross) <= 1e-9 * scale) & (np.einsum("ij,ij->i", a, b) < 0.0)
 
     def reflex(self, x: np.ndarray) -> np.ndarray:
@@ -96,16 +136,29 @@ class VertexTopology:
     def convex_and_bisector(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Convexity of every vertex and its outward unit bisector."""
         a, b, cross, _ = self._turn(x)
-        convex = cross < 0.0  # counter-clockwise polygon: prev -> v -> next turns left
-        ua = a / np.linalg.norm(a, axis=1)[:, None]
-        ub = b / np.linalg.norm(b, axis=1)[:, None]
-        inward = ua + ub
-        norm = np.linalg.norm(inward, axis=1)
-        # a straight vertex has no bisector; its inward normal is the left normal of prev->next
-        straight = norm < 1e-12
+        return cross < 0.0, _outward_bisector(a, b)
+
+
+def _norm(v):
+    """Row norms of (n, 2) ``v``: ``np.linalg.norm(v, axis=1)`` to the bit, without its
+    overhead."""
+    return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1])
+
+
+def _outward_bisector(a, b):
+    """The outward unit bisector of vertices with arms a (to prev) and b (to next)."""
+    ua = a / _norm(a)[:, None]
+    ub = b / _norm(b)[:, None]
+    inward = ua + ub
+    norm = _norm(inward)
+    # a straight vertex has no bisector; its inward normal is the left normal of prev->next
+    straight = norm < 1e-12
+    if straight.any():
         left = np.stack([-ub[:, 1], ub[:, 0]], axis=1)
         inward = np.where(straight[:, None], left, inward / np.maximum(norm, 1e-300)[:, None])
-        return convex, -inward
+    else:
+        inward = inward / np.maximum(norm, 1e-300)[:, None]
+    return -inward
 
 
 def bounding_boxes(x: np.ndarray, offsets: np.ndarray) -> np.ndarray:
@@ -128,7 +181,7 @@ def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     lo = boxes[:, :2] - margin
     hi = boxes[:, 2:] + margin
     centres = 0.5 * (lo + hi)
-    axis = int(np.argmax(np.ptp(centres, axis=0)))
+    axis = int(np.argmax(centres.max(axis=0) - centres.min(axis=0)))
     other = 1 - axis
     order = np.argsort(lo[:, axis], kind="stable")
     lo_sorted = lo[order, axis]
@@ -144,49 +197,92 @@ def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     i, j = order[i_sorted], order[j_sorted]
     keep = (lo[i, other] <= hi[j, other]) & (lo[j, other] <= hi[i, other])
     i, j = i[keep], j[keep]
-    return np.stack([np.minimum(i, j), np.maximum(i, j)], axis=1)
+    out = np.empty((len(i), 2), dtype=np.int64)
+    np.minimum(i, j, out=out[:, 0])
+    np.maximum(i, j, out=out[:, 1])
+    return out
 
 
 @dataclass
 class CandidateContacts:
-    """Vertex-edge pairs found by the narrow phase (edge = start vertex of the CCW edge)."""
+    """Vertex-edge pairs found by the narrow phase (edge = start vertex of the CCW edge).
+
+    ``geometry`` is their :class:`dda.contact.kinematics.ContactGeometry` at the positions
+    the narrow phase looked at, when it has it (:func:`dda.contact.contacts.carry_over`
+    takes it from there instead of computing it again).
+    """
 
     vertex: np.ndarray
     edge: np.ndarray
     bj: np.ndarray
     bk: np.ndarray
     pairs: int = 0  # block pairs the broad phase handed to the narrow phase
+    geometry: ContactGeometry | None = None
 
     def __len__(self):
         return len(self.vertex)
 
 
-def _directed_vertex_block_pairs(pairs, topo, x, boxes, margin):
-    """Every (vertex of j, block k) for both orders of each pair, vertex inside k's box."""
-    j = np.concatenate([pairs[:, 0], pairs[:, 1]])
-    k = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    counts = np.diff(topo.offsets)[j]
-    pid = np.repeat(np.arange(len(j)), counts)
-    run_start = np.repeat(np.cumsum(counts) - counts, counts)
-    vertex = topo.offsets[j][pid] + (np.arange(int(counts.sum())) - run_start)
-    kk = k[pid]
-    p = x[vertex]
-    box = boxes[kk]
-    inside = (
+def _empty_candidates(pairs: int) -> CandidateContacts:
+    z = np.zeros(0, dtype=np.int64)
+    return CandidateContacts(z, z, z, z, pairs)
+
+
+def _vertex_block_rows(pairs, topo):
+    """Every (vertex of j, block k) for both orders of each pair (a function of the pairs
+    alone: kept in ``topo.memo``)."""
+    def make():
+        j = np.concatenate([pairs[:, 0], pairs[:, 1]])
+        k = np.concatenate([pairs[:, 1], pairs[:, 0]])
+        counts = topo.counts[j]
+        pid = np.repeat(np.arange(len(j)), counts)
+        run_start = np.repeat(np.cumsum(counts) - counts, counts)
+        vertex = topo.offsets[j][pid] + (np.arange(int(counts.sum())) - run_start)
+        return vertex, k[pid]
+
+    return topo.memo.get(("vertex-block", pairs.tobytes()), make)
+
+
+def _in_boxes(p, box, margin):
+    """Whether each point lies in its box [xmin, ymin, xmax, ymax] grown by ``margin``."""
+    return (
         (p[:, 0] >= box[:, 0] - margin)
         & (p[:, 0] <= box[:, 2] + margin)
         & (p[:, 1] >= box[:, 1] - margin)
         & (p[:, 1] <= box[:, 3] + margin)
     )
+
+
+def _directed_vertex_block_pairs(pairs, topo, x, boxes, margin):
+    """Every (vertex of j, block k) for both orders of each pair, vertex inside k's box."""
+    vertex, kk = _vertex_block_rows(pairs, topo)
+    inside = _in_boxes(x[vertex], boxes[kk], margin)
     return vertex[inside], kk[inside]
 
 
+def _edge_runs(kblock, offsets, counts=None):
+    """Every edge of each block of ``kblock``, block after block: the row each edge belongs
+    to, the edge (CCW start index), and each run's length and start."""
+    counts = np.diff(offsets)[kblock] if counts is None else counts[kblock]
+    starts = np.cumsum(counts) - counts
+    pid = np.repeat(np.arange(len(kblock)), counts)
+    edge = offsets[kblock][pid] + (np.arange(len(pid)) - starts[pid])
+    return pid, edge, counts, starts
+
+
 def _expand_to_edges(vertex, kblock, offsets):
-    counts = np.diff(offsets)[kblock]
-    pid = np.repeat(np.arange(len(vertex)), counts)
-    run_start = np.repeat(np.cumsum(counts) - counts, counts)
-    edge = offsets[kblock][pid] + (np.arange(int(counts.sum())) - run_start)
+    pid, edge, _, _ = _edge_runs(kblock, offsets)
     return vertex[pid], edge
+
+
+def _vertex_edge_rows(vertex, kblock, topo):
+    """Every edge of block k for each (vertex, k) (kept in ``topo.memo``: the rows are the
+    same from step to step while the blocks stay near each other)."""
+    def make():
+        pid, edge, _, _ = _edge_runs(kblock, topo.offsets, topo.counts)
+        return vertex[pid], edge
+
+    return topo.memo.get(("vertex-edge", vertex.tobytes(), kblock.tobytes()), make)
 
 
 def narrow_phase(
@@ -219,37 +315,41 @@ def narrow_phase(
     margin = max(search_distance, penetration_limit)
     if pairs is None:
         pairs = broad_phase(boxes, margin)
-    empty = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)), len(pairs))
     if len(pairs) == 0:
-        return empty
+        return _empty_candidates(len(pairs))
     vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, margin)
-    convex, bisector = topo.convex_and_bisector(x)
-    keep = convex[vertex]
+    a, b, cross, scale = topo._turn(x)
+    keep = cross[vertex] < 0.0  # convex (counter-clockwise: prev -> v -> next turns left)
     vertex, kblock = vertex[keep], kblock[keep]
     if len(vertex) == 0:
-        return empty
-    vertex, edge = _expand_to_edges(vertex, kblock, topo.offsets)
+        return _empty_candidates(len(pairs))
+    vertex, edge = _vertex_edge_rows(vertex, kblock, topo)
     frame = contact_geometry(x, vertex, edge, topo.nxt)
-    ok, sunk = _within_reach(x, topo, vertex, edge, frame, search_distance, penetration_limit,
-                             sunk_depth)
-    c = _Candidates(vertex[ok], edge[ok], frame.xi[ok], topo.block[edge[ok]],
-                    -np.einsum("ij,ij->i", frame.normal[ok], bisector[vertex[ok]]),
-                    frame.p1[ok], ((frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL))[ok],
-                    sunk[ok])
-    if len(c.vertex) == 0:
-        return empty
-    c = _one_edge_per_block(c, x, topo, frame.gap[ok], frame.length[ok])
-    vertex, edge, kblock = _drop_mirrored(c, x, topo, max(search_distance, penetration_limit))
-    return CandidateContacts(
-        vertex=vertex, edge=edge, bj=topo.block[vertex], bk=kblock, pairs=len(pairs)
-    )
+    on_edge = (frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL)
+    ok, sunk = _within_reach(x, topo, vertex, edge, frame, on_edge, search_distance,
+                             penetration_limit, sunk_depth)
+    row = ok.nonzero()[0]
+    if len(row) == 0:
+        return _empty_candidates(len(pairs))
+    v = vertex[row]
+    c = _Candidates(v, edge[row], frame.xi[row], topo.block[edge[row]],
+                    -np.einsum("ij,ij->i", frame.normal[row], _outward_bisector(a[v], b[v])),
+                    frame.p1[row], on_edge[row], sunk[row], row)
+    c = _one_edge_per_block(c, topo, frame.gap[row], frame.length[row],
+                            cross > 1e-9 * scale)
+    c = _drop_mirrored(c, x, topo, max(search_distance, penetration_limit))
+    r = c.row
+    geometry = ContactGeometry(frame.p1[r], frame.p2[r], frame.p3[r], frame.length[r],
+                               frame.tau[r], frame.normal[r], frame.gap[r], frame.xi[r])
+    return CandidateContacts(vertex=c.vertex, edge=c.edge, bj=topo.block[c.vertex],
+                             bk=c.kblock, pairs=len(pairs), geometry=geometry)
 
 
 @dataclass
 class _Candidates:
     """Vertex-edge candidates on their way through :func:`narrow_phase`: vertex, edge, foot
     parameter xi, the edge's block, the score (how well the edge opposes the vertex), the
-    vertex's position, foot on the edge, sunk."""
+    vertex's position, foot on the edge, sunk, and the row of the narrow phase's frame."""
 
     vertex: np.ndarray
     edge: np.ndarray
@@ -259,19 +359,23 @@ class _Candidates:
     p1: np.ndarray
     on_edge: np.ndarray
     sunk: np.ndarray
+    row: np.ndarray
 
     def take(self, index) -> _Candidates:
         return _Candidates(*(a[index] for a in (self.vertex, self.edge, self.xi, self.kblock,
-                                                self.score, self.p1, self.on_edge, self.sunk)))
+                                                self.score, self.p1, self.on_edge, self.sunk,
+                                                self.row)))
 
 
-def _within_reach(x, topo, vertex, edge, frame, search_distance, penetration_limit,
+_SIN_TOL = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
+
+
+def _within_reach(x, topo, vertex, edge, frame, on_edge, search_distance, penetration_limit,
                   sunk_depth):
     """Which vertex-edge pairs may be contacts (gap, inside test, end reach, entrance), and
     which vertices are sunk (the rules of :func:`narrow_phase`)."""
     p1, p2, p3 = frame.p1, frame.p2, frame.p3
     normal, gap, xi = frame.normal, frame.gap, frame.xi
-    on_edge = (xi >= -_XI_TOL) & (xi <= 1.0 + _XI_TOL)
     # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
     end = np.where((xi < 0.5)[:, None], p2, p3)
     end_distance = np.hypot(*(p1 - end).T)
@@ -285,12 +389,24 @@ def _within_reach(x, topo, vertex, edge, frame, search_distance, penetration_lim
     # penalty, a deep impact) is held by the edge it is least deep behind whatever its
     # arms do: a box corner sunk 1.2 cm into an anvil's apex and turning failed the test on
     # the near face and was taken 3.5 cm deep behind the other, 500 J/m of spring at once
-    sin_tol = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
     for nb in (topo.prv[vertex], topo.nxt[vertex]):
         arm = x[nb] - p1
         arm_len = np.hypot(arm[:, 0], arm[:, 1])
-        ok &= sunk | (np.einsum("ij,ij->i", arm, normal) >= -sin_tol * arm_len)
+        ok &= sunk | (np.einsum("ij,ij->i", arm, normal) >= -_SIN_TOL * arm_len)
     return ok, sunk
+
+
+def _groups(keys):
+    """Runs of equal keys: the distinct keys (sorted), the first index of each, and the run
+    of every key (``np.unique(keys, return_index=True, return_inverse=True)``)."""
+    order = np.argsort(keys, kind="stable")
+    sorted_keys = keys[order]
+    head = np.empty(len(keys), dtype=bool)
+    head[:1] = True
+    np.not_equal(sorted_keys[1:], sorted_keys[:-1], out=head[1:])
+    inverse = np.empty(len(keys), dtype=np.int64)
+    inverse[order] = np.cumsum(head) - 1
+    return sorted_keys[head], order[head], inverse
 
 
 def _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth):
@@ -302,17 +418,16 @@ def _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth)
     # a vertex behind an edge's line is in contact with it only when it is inside the
     # block: beyond a thin block's far side it is behind the near edge's line too (gaps
     # within round-off of zero are left alone: touching is neither inside nor out)
-    behind = np.flatnonzero(ok & (gap < -_GAP_TIE * frame.length))
+    behind = (ok & (gap < -_GAP_TIE * frame.length)).nonzero()[0]
     sunk = np.zeros(len(ok), dtype=bool)
     reach = np.full(len(ok), search_distance)
     if len(behind) == 0:
         return sunk, reach
     # once per (vertex, block), not per edge
     nb = len(topo.offsets)
-    key, first, back = np.unique(vertex[behind] * nb + topo.block[edge[behind]],
-                                 return_index=True, return_inverse=True)
-    inside, depth, _ = inside_depth(frame.p1[behind[first]], key % nb, x, topo.offsets,
-                                    topo.nxt)
+    key, first, back = _groups(vertex[behind] * nb + topo.block[edge[behind]])
+    inside, depth, _ = _inside_depth(frame.p1[behind[first]], key % nb, x, topo,
+                                     nearest=False)
     inside, depth = inside[back], depth[back]
     # on the boundary (within round-off of an edge) is neither in nor out: a corner of a
     # block sitting on an equal-width one lies on the lower block's side line
@@ -331,12 +446,17 @@ def _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth)
     return sunk, reach
 
 
-def _one_edge_per_block(c: _Candidates, x, topo, gap, length) -> _Candidates:
+def _one_edge_per_block(c: _Candidates, topo, gap, length, reflex) -> _Candidates:
     """One edge per (vertex, block): the one the vertex is least deep behind (the signed
     distance to a convex block is the largest of the gaps to its edges' lines), then one
-    whose foot is on it, then the best opposed; and across a reflex corner the other edge."""
-    group = np.unique(c.vertex * len(topo.offsets) + c.kblock, return_inverse=True)[1]
-    best = np.full(group.max() + 1, -np.inf)
+    whose foot is on it, then the best opposed; and across a reflex corner the other edge.
+    ``reflex`` says which vertices are reflex (:meth:`VertexTopology.reflex`). The result is
+    sorted by vertex, then block."""
+    key = c.vertex * len(topo.offsets) + c.kblock
+    uniq, first_of, group = _groups(key)
+    if len(uniq) == len(key):  # one edge each already: nothing to choose, only the order
+        return c.take(first_of)
+    best = np.full(len(first_of), -np.inf)
     np.maximum.at(best, group, gap)
     least_deep = gap >= best[group] - _GAP_TIE * length
     c = c.take(np.lexsort((-c.score, ~c.on_edge, ~least_deep, c.kblock, c.vertex)))
@@ -347,24 +467,19 @@ def _one_edge_per_block(c: _Candidates, x, topo, gap, length) -> _Candidates:
     # from the chosen one too (a block sliding into a notch would otherwise lose its seat on
     # the face as soon as the notch's wall becomes the least deep edge)
     chosen = c.edge[first][np.cumsum(first) - 1]
-    reflex = topo.reflex(x)
     keep = first | ((c.edge == topo.nxt[chosen]) & reflex[topo.nxt[chosen]]) | (
         (c.edge == topo.prv[chosen]) & reflex[chosen])
     return c.take(keep)
 
 
-def _drop_mirrored(c: _Candidates, x, topo, reach):
-    """Vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P).
-
-    Returns the kept vertices, edges and edge blocks.
-    """
-    vertex, edge, kblock = c.vertex, c.edge, c.kblock
-    near_end = np.where(c.xi < 0.5, topo.nxt[edge], edge)
-    dist = np.linalg.norm(c.p1 - x[near_end], axis=1)
-    vv = dist <= reach
+def _drop_mirrored(c: _Candidates, x, topo, reach) -> _Candidates:
+    """Vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)."""
+    vertex = c.vertex
+    near_end = np.where(c.xi < 0.5, topo.nxt[c.edge], c.edge)
+    vv = _norm(c.p1 - x[near_end]) <= reach
     if not vv.any():
-        return vertex, edge, kblock
-    idx = np.flatnonzero(vv)
+        return c
+    idx = vv.nonzero()[0]
     a = np.minimum(vertex[idx], near_end[idx])
     b = np.maximum(vertex[idx], near_end[idx])
     order = np.lexsort((vertex[idx], -c.score[idx], ~c.on_edge[idx], b, a))
@@ -377,13 +492,14 @@ def _drop_mirrored(c: _Candidates, x, topo, reach):
     dup &= ~c.sunk[idx]  # a sunk vertex keeps its own spring
     drop = np.zeros(len(vertex), dtype=bool)
     drop[idx[dup]] = True
-    return vertex[~drop], edge[~drop], kblock[~drop]
+    return c.take(~drop)
 
 
 def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.ndarray,
-                 nxt: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 nxt: np.ndarray, nearest: bool = True):
     """Whether each point ``p`` (n, 2) lies inside block ``kblock`` (n,), its distance to the
-    block's boundary and the nearest edge (CCW start index), all points at once.
+    block's boundary and the nearest edge (CCW start index; None unless ``nearest``), all
+    points at once.
 
     Inside is the even-odd rule on a ray towards +x (half-open in y, so a ray through a
     vertex counts once): exact for non-convex blocks. The distance is the least distance to
@@ -392,30 +508,49 @@ def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.n
     if len(p) == 0:
         z = np.zeros(0, dtype=np.int64)
         return np.zeros(0, dtype=bool), np.zeros(0), z
-    counts = np.diff(offsets)[kblock]
-    pid, edge = _expand_to_edges(np.arange(len(p)), kblock, offsets)
+    pid, edge, _, starts = _edge_runs(kblock, offsets)
+    return _inside_depth_of_runs(p, x, pid, edge, nxt[edge], starts, nearest)
+
+
+def _inside_depth(p, kblock, x, topo: VertexTopology, nearest: bool = True):
+    """:func:`inside_depth` with the edge runs of ``kblock`` kept in ``topo.memo``."""
+    if len(p) == 0:
+        return inside_depth(p, kblock, x, topo.offsets, topo.nxt, nearest)
+
+    def make():
+        pid, edge, _, starts = _edge_runs(kblock, topo.offsets, topo.counts)
+        return pid, edge, topo.nxt[edge], starts
+
+    runs = topo.memo.get(("edge-runs", kblock.tobytes()), make)
+    return _inside_depth_of_runs(p, x, *runs, nearest)
+
+
+def _inside_depth_of_runs(p, x, pid, edge, edge_end, starts, nearest):
     q = p[pid]
     a = x[edge]
-    b = x[nxt[edge]]
+    b = x[edge_end]
     ab = b - a
+    qa = q - a
     # compare the end points themselves: a + (b - a) need not be b in floating point, and a
     # ray through a vertex would then count it twice or not at all
     straddles = (a[:, 1] > q[:, 1]) != (b[:, 1] > q[:, 1])
     dy = np.where(straddles, ab[:, 1], 1.0)
-    crossing = straddles & (q[:, 0] < a[:, 0] + (q[:, 1] - a[:, 1]) * ab[:, 0] / dy)
+    crossing = straddles & (q[:, 0] < a[:, 0] + qa[:, 1] * ab[:, 0] / dy)
     len2 = np.einsum("ij,ij->i", ab, ab)
-    t = np.clip(np.einsum("ij,ij->i", q - a, ab) / np.maximum(len2, 1e-300), 0.0, 1.0)
+    t = np.minimum(np.maximum(np.einsum("ij,ij->i", qa, ab) / np.maximum(len2, 1e-300), 0.0),
+                   1.0)
     dist = np.hypot(*(q - (a + t[:, None] * ab)).T)
-    starts = np.cumsum(counts) - counts
-    inside = np.add.reduceat(crossing.astype(np.int64), starts) % 2 == 1
+    inside = np.bitwise_xor.reduceat(crossing, starts)  # an odd number of crossings
     depth = np.minimum.reduceat(dist, starts)
+    if not nearest:
+        return inside, depth, None
     # the nearest edge: the first of its run at the run's least distance
-    idx = np.flatnonzero(dist == np.repeat(depth, counts))
+    idx = (dist == depth[pid]).nonzero()[0]
     first = np.ones(len(idx), dtype=bool)
     first[1:] = pid[idx[1:]] != pid[idx[:-1]]
-    nearest = np.empty(len(p), dtype=np.int64)
-    nearest[pid[idx[first]]] = edge[idx[first]]
-    return inside, depth, nearest
+    near = np.empty(len(p), dtype=np.int64)
+    near[pid[idx[first]]] = edge[idx[first]]
+    return inside, depth, near
 
 
 def _strictly_inside(p, kblock, x, offsets, nxt, tol):

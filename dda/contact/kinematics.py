@@ -63,7 +63,9 @@ def contact_frame(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> ContactGeom
     d = p3 - p2
     length = np.hypot(d[:, 0], d[:, 1])
     tau = d / length[:, None]
-    normal = np.stack([-tau[:, 1], tau[:, 0]], axis=1)
+    normal = np.empty_like(tau)
+    np.negative(tau[:, 1], out=normal[:, 0])
+    normal[:, 1] = tau[:, 0]
     rel = p1 - p2
     gap = np.einsum("ij,ij->i", rel, normal)
     xi = np.einsum("ij,ij->i", rel, tau) / length
@@ -91,15 +93,18 @@ class TrialKinematics:
 
 
 def pair_maps(x_ref, vertex, edge, nxt, cj, ck):
-    """Rows mapping [d_j; d_k] (12) to the motion of P1, P2 and P3: three (m, 2, 12) arrays."""
+    """Rows mapping [d_j; d_k] (12) to the motion of P1, P2 and P3: three (m, 2, 12) arrays.
+
+    Each is :func:`dda.geometry.t_matrix` of its point, in the columns of its block (all
+    three built at once; they are the three C-contiguous parts of one (3, m, 2, 12) array).
+    """
     m = len(vertex)
-    a1 = np.zeros((m, 2, 12))
-    a2 = np.zeros((m, 2, 12))
-    a3 = np.zeros((m, 2, 12))
-    a1[:, :, :6] = t_matrix(x_ref[vertex], cj)
-    a2[:, :, 6:] = t_matrix(x_ref[nxt[edge]], ck)
-    a3[:, :, 6:] = t_matrix(x_ref[edge], ck)
-    return a1, a2, a3
+    t = t_matrix(np.concatenate([x_ref[vertex], x_ref[nxt[edge]], x_ref[edge]]),
+                 np.concatenate([cj, ck, ck]))
+    a = np.zeros((3, m, 2, 12))
+    a[0, :, :, :6] = t[:m]
+    a[1:, :, :, 6:] = t[m:].reshape(2, m, 2, 6)
+    return a[0], a[1], a[2]
 
 
 def trial_kinematics(p1, p2, p3, xi0, maps, second=True) -> TrialKinematics:
@@ -143,8 +148,9 @@ def trial_kinematics(p1, p2, p3, xi0, maps, second=True) -> TrialKinematics:
         e0_row = np.einsum("mi,mij->mj", n, rel0)
         j_row = np.einsum("mi,mij->mj", tau, db)
 
-        def sym(u, v):
-            return u[:, :, None] * v[:, None, :] + v[:, :, None] * u[:, None, :]
+        def sym(u, v):  # u v^T + v u^T (v u^T is the transpose of u v^T, to the bit)
+            uv = u[:, :, None] * v[:, None, :]
+            return uv + uv.transpose(0, 2, 1)
 
         hh = h_row[:, :, None] * h_row[:, None, :]
         inv_l = (1.0 / length)[:, None, None]

@@ -25,9 +25,9 @@ from dda.contact.contacts import OPEN
 from dda.contact.detection import (
     VertexTopology,
     _directed_vertex_block_pairs,
+    _inside_depth,
     bounding_boxes,
     broad_phase,
-    inside_depth,
 )
 
 __all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
@@ -96,10 +96,11 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
     vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
     # a vertex between collinear edges is a point of a side, not a corner: where two blocks
     # overlap edge to edge it is inside the other, and the corners' springs hold the overlap
-    vertex, kblock = (a[~topo.straight(x)[vertex]] for a in (vertex, kblock))
+    corner = ~topo.straight(x, vertex)
+    vertex, kblock = vertex[corner], kblock[corner]
     if len(vertex) == 0:
         return _empty()
-    inside, depth, nearest = inside_depth(x[vertex], kblock, x, offsets, topo.nxt)
+    inside, depth, nearest = _inside_depth(x[vertex], kblock, x, topo)
     keep = inside & (depth > min_depth)
     return Penetrations(vertex[keep], kblock[keep], depth[keep], nearest[keep])
 
@@ -125,7 +126,7 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
     if len(pen) == 0:
         return np.zeros(0)
     c = contacts
-    closed = np.flatnonzero(c.state != OPEN)
+    closed = (c.state != OPEN).nonzero()[0]
     if len(closed) == 0:
         return pen.depth.copy()
     spring = -c.t_n[closed] / normal_penalty[closed]
@@ -139,8 +140,8 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
     # the mirror image of a vertex-vertex contact: a closed contact between the same blocks
     # whose contacted edge ends at the vertex
     edge_end = np.concatenate([c.edge[closed], topo.nxt[c.edge[closed]]])
-    mirrored = edge_end * nb + np.tile(c.bj[closed], 2)
-    held_mirror = _gather(mirrored, np.tile(spring, 2), want, np.maximum)
+    mirrored = edge_end * nb + np.concatenate([c.bj[closed], c.bj[closed]])
+    held_mirror = _gather(mirrored, np.concatenate([spring, spring]), want, np.maximum)
     held = np.maximum(held_own, held_mirror)
     return pen.depth - held
 
@@ -150,9 +151,13 @@ def _gather(keys, values, want, reduce) -> np.ndarray:
     (0 where none is)."""
     order = np.argsort(keys, kind="stable")
     keys, values = keys[order], values[order]
-    uniq, start = np.unique(keys, return_index=True)
+    head = np.empty(len(keys), dtype=bool)
+    head[:1] = True
+    np.not_equal(keys[1:], keys[:-1], out=head[1:])
+    start = head.nonzero()[0]
+    uniq = keys[start]
     total = reduce.reduceat(values, start)
-    pos = np.clip(np.searchsorted(uniq, want), 0, len(uniq) - 1)
+    pos = np.minimum(np.searchsorted(uniq, want), len(uniq) - 1)
     return np.where(uniq[pos] == want, total[pos], 0.0)
 
 
@@ -191,13 +196,14 @@ def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
         return GuardReport()
     pen = vertex_penetrations(x_new, model.topo, pairs=pairs)
     closed = contacts.state != OPEN
-    spring = float(np.max(-contacts.t_n[closed] / normal_penalty[closed], initial=0.0))
+    spring = float(np.maximum.reduce(-contacts.t_n[closed] / normal_penalty[closed],
+                                      initial=0.0))
     if len(pen) == 0:
         return GuardReport("", pen.deepest, spring)
     tol = tolerance * np.minimum(model.thickness[model.topo.block[pen.vertex]],
                                  model.thickness[pen.block])
     ratio = untracked_depth(pen, contacts, normal_penalty, model.topo) / tol
-    untracked = float(np.max(ratio))
+    untracked = float(ratio.max())
     if not (ratio > 1.0).any():
         return GuardReport("", pen.deepest, spring, untracked)
     i = int(np.argmax(ratio))

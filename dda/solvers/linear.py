@@ -219,7 +219,9 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
     block_f : (n_blocks, 6) effective block forces
     free : (n_blocks,) bool, blocks with unknowns
     bj, bk : (m,) the two blocks of each contact
-    pair_k : (m, 12, 12) contact stiffness on [d_j; d_k]
+    pair_k : PairStiffness or (m, 12, 12) array, contact stiffness on [d_j; d_k]
+        (:class:`dda.kernels.PairStiffness`, the rank-one terms the contact element gives,
+        takes the compiled assembly; an array takes the numpy path)
     pair_f : (m, 12) contact forces on [d_j; d_k]
     d_known : (n_blocks, 6) increments of the blocks whose motion is known
     pattern : SystemPattern, optional
