@@ -28,6 +28,10 @@ __all__ = ["NewtonRaphson"]
 
 # residuals below this fraction of the forces that stop decreasing are round-off
 ROUND_OFF = 1e-6
+# Newton iterations from the predictor that settled open and closed only, before the stick and
+# slip states are settled too (it converges in 1-3 where it converges: 60 x 60 stack of
+# benchmarks/stacks.py; one step in four there ran all 25 and failed before the retry)
+PREDICTOR_ITERATIONS = 6
 
 
 class NewtonRaphson(NonlinearSolver):
@@ -70,24 +74,31 @@ class NewtonRaphson(NonlinearSolver):
                 return StepSolution(None, None, False, passes, 0, oc.reason)
             if len(problem.element) == 0:  # no contacts: the step is linear, its solve exact
                 return StepSolution(oc.d, problem.element.contacts, True, passes, 0)
-            sol = self.iterate(problem, oc.d)
+            # from the looser predictor Newton gets a few iterations only: when it has not
+            # converged by then, settling stick and slip first is the cheaper way on
+            limit = (None if oc.friction_settled
+                     else min(self.max_iter, PREDICTOR_ITERATIONS))
+            sol = self.iterate(problem, oc.d, limit)
             sol.open_close_passes = passes
             if sol.converged or oc.friction_settled:  # settling again would change nothing
                 break
         return sol
 
-    def iterate(self, problem: StepProblem, d: np.ndarray) -> StepSolution:
+    def iterate(self, problem: StepProblem, d: np.ndarray,
+                max_iter: int | None = None) -> StepSolution:
         """Newton-Raphson iterations of one step from the increments ``d`` (n_blocks, 6).
 
-        The known blocks' rows of ``d`` must equal ``problem.d_known``. Returns the converged
-        trial, or a failed solution whose ``residual_norms`` show what happened.
+        The known blocks' rows of ``d`` must equal ``problem.d_known``; at most ``max_iter``
+        iterations (default: the solver's). Returns the converged trial, or a failed solution
+        whose ``residual_norms`` show what happened.
         """
+        max_iter = self.max_iter if max_iter is None else max_iter
         el = problem.element
         free = problem.free
         d = d.copy()
         norms: list[float] = []
         zero_known = np.zeros_like(problem.d_known)
-        for it in range(self.max_iter + 1):
+        for it in range(max_iter + 1):
             resp = el.response(d)
             inertia = np.einsum("bij,bj->bi", problem.block_k, d)
             block_r = inertia - problem.block_f
@@ -104,9 +115,9 @@ class NewtonRaphson(NonlinearSolver):
             if not np.isfinite(norm):
                 return StepSolution(None, None, False, 0, it,
                                     "Newton-Raphson diverged (non-finite residual)", norms)
-            if it == self.max_iter:
+            if it == max_iter:
                 return StepSolution(None, None, False, 0, it, (
-                    f"Newton-Raphson did not converge in {self.max_iter} iterations "
+                    f"Newton-Raphson did not converge in {max_iter} iterations "
                     f"(|R| = {norm:.3g}, {norm / scale:.3g} of the forces)"), norms)
             try:
                 step = assemble_and_solve(problem.block_k, -block_r, free, el.bj, el.bk,
