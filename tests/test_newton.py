@@ -68,4 +68,3 @@ def test_newton_rejects_bad_settings():
         dda.solvers.NewtonRaphson(tol=-1.0)
     with pytest.raises(ValueError, match="max_iter"):
         dda.solvers.NewtonRaphson(max_iter=0)
-
