@@ -14,7 +14,8 @@ memory is its own) for ``--steps`` steps and prints:
   opened contacts, switched contacts between stick and slip only, or found only a sliding
   contact whose lagged normal force was off by more than ``NORMAL_FORCE_RTOL``
   (:data:`dda.solvers.open_close.PASS_LOG`);
-- peak resident memory above the process's size after the imports (MB).
+- peak resident memory above the process's size after the imports and a 2 x 2 warm-up run
+  (which loads the compiled kernels and MKL) (MB).
 
 The C code's numbers on the same scenes (issue 19, same machine class, dt 1e-3): 1.17 ms (101
 blocks), 55.7 ms (901), 795 ms (3,601) per step, one OPEN-CLOSE pass.
@@ -65,6 +66,9 @@ def measure(n: int, solver: str, steps: int) -> dict:
     import dda.solvers.open_close as oc
     from dda.registry import make_solver
 
+    # a 2 x 2 stack first: the libraries a run loads (numba's kernels, MKL) are not the
+    # stack's memory, and their first call is not its time
+    dda.Simulation(stack(2), dt=1e-3, solver=make_solver(solver)).run(3e-3, progress=False)
     scene = stack(n)
     base_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     nonlinear = make_solver(solver)
