@@ -173,8 +173,9 @@ def bounding_boxes(x: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     """Pairs (i < j) of blocks whose boxes, grown by ``margin``, overlap (sort and sweep).
 
-    The sweep runs along the axis of larger spread of the box centres; every step is a numpy
-    operation (sort, searchsorted, repeat), so the cost is O(N log N + candidate pairs).
+    The sweep runs along the axis of larger spread of the box centres: a sort and a
+    searchsorted in numpy, then a compiled loop over the boxes each box's interval reaches,
+    so the cost is O(N log N + candidate pairs).
     """
     n = len(boxes)
     if n < 2:
@@ -187,21 +188,29 @@ def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     order = np.argsort(lo[:, axis], kind="stable")
     lo_sorted = lo[order, axis]
     stop = np.searchsorted(lo_sorted, hi[order, axis], side="right")
-    first = np.arange(1, n + 1)
-    counts = np.maximum(stop - first, 0)
-    total = int(counts.sum())
-    if total == 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    i_sorted = np.repeat(np.arange(n), counts)
-    run_start = np.repeat(np.cumsum(counts) - counts, counts)
-    j_sorted = np.repeat(first, counts) + (np.arange(total) - run_start)
-    i, j = order[i_sorted], order[j_sorted]
-    keep = (lo[i, other] <= hi[j, other]) & (lo[j, other] <= hi[i, other])
-    i, j = i[keep], j[keep]
-    out = np.empty((len(i), 2), dtype=np.int64)
-    np.minimum(i, j, out=out[:, 0])
-    np.maximum(i, j, out=out[:, 1])
-    return out
+    return _sweep(order, stop, np.ascontiguousarray(lo[:, other]),
+                  np.ascontiguousarray(hi[:, other]))
+
+
+@njit(cache=True)
+def _sweep(order, stop, lo, hi):
+    """The pairs (min, max) of sorted positions s < t < stop[s] whose intervals [lo, hi] on
+    the other axis overlap, s by s and t by t (the order of the numpy sweep)."""
+    n = order.shape[0]
+    total = 0
+    for s in range(n):
+        total += max(stop[s] - s - 1, 0)
+    out = np.empty((total, 2), dtype=np.int64)
+    m = 0
+    for s in range(n):
+        i = order[s]
+        for t in range(s + 1, stop[s]):
+            j = order[t]
+            if lo[i] <= hi[j] and lo[j] <= hi[i]:
+                out[m, 0] = min(i, j)
+                out[m, 1] = max(i, j)
+                m += 1
+    return out[:m].copy()
 
 
 @dataclass
@@ -530,25 +539,61 @@ def _groups(keys):
 
 def _drop_mirrored(c: _Candidates, x, topo, reach) -> _Candidates:
     """Vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)."""
-    vertex = c.vertex
-    near_end = np.where(c.xi < 0.5, topo.nxt[c.edge], c.edge)
-    vv = _norm(c.p1 - x[near_end]) <= reach
-    if not vv.any():
-        return c
-    idx = vv.nonzero()[0]
-    a = np.minimum(vertex[idx], near_end[idx])
-    b = np.maximum(vertex[idx], near_end[idx])
-    order = np.lexsort((vertex[idx], -c.score[idx], ~c.on_edge[idx], b, a))
-    a, b, idx = a[order], b[order], idx[order]
-    head = np.ones(len(idx), dtype=bool)
-    head[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1])
-    kept_vertex = vertex[idx][head][np.cumsum(head) - 1]
-    # only the mirror image goes: the same vertex in a reflex corner keeps both edges
-    dup = ~head & (vertex[idx] != kept_vertex)
-    dup &= ~c.sunk[idx]  # a sunk vertex keeps its own spring
-    drop = np.zeros(len(vertex), dtype=bool)
-    drop[idx[dup]] = True
-    return c.take(~drop)
+    drop = _mirrored_kernel(c.vertex, c.edge, c.xi, c.p1, c.score, c.on_edge, c.sunk, x,
+                            topo.nxt, float(reach))
+    return c.take(~drop) if drop.any() else c
+
+
+@njit(cache=True)
+def _mirrored_kernel(vertex, edge, xi, p1, score, on_edge, sunk, x, nxt, reach):
+    """Which candidates :func:`_drop_mirrored` drops: of the vertex-vertex cases (P within
+    ``reach`` of the edge's end Q nearer its foot) with the same two vertices, the first by
+    (foot on the edge, best opposed, lower vertex, order) is kept, and of the others those
+    of the other vertex that are not sunk go."""
+    n = vertex.shape[0]
+    n_vertices = x.shape[0]
+    drop = np.zeros(n, dtype=np.bool_)
+    idx = np.empty(n, dtype=np.int64)
+    key = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        q = nxt[edge[i]] if xi[i] < 0.5 else edge[i]
+        dx = p1[i, 0] - x[q, 0]
+        dy = p1[i, 1] - x[q, 1]
+        if np.sqrt(dx * dx + dy * dy) <= reach:
+            idx[m] = i
+            key[m] = min(vertex[i], q) * n_vertices + max(vertex[i], q)
+            m += 1
+    if m == 0:
+        return drop
+    idx = idx[:m]
+    key = key[:m]
+    order = np.argsort(key, kind="mergesort")
+    start = 0
+    while start < m:
+        stop = start + 1
+        while stop < m and key[order[stop]] == key[order[start]]:
+            stop += 1
+        if stop - start > 1:
+            head = idx[order[start]]
+            for t in range(start + 1, stop):
+                i = idx[order[t]]
+                if on_edge[i] != on_edge[head]:
+                    better = on_edge[i]
+                elif score[i] != score[head]:
+                    better = score[i] > score[head]
+                else:
+                    better = vertex[i] < vertex[head]
+                if better:
+                    head = i
+            for t in range(start, stop):
+                i = idx[order[t]]
+                # only the mirror image goes: the same vertex in a reflex corner keeps both
+                # edges; a sunk vertex keeps its own spring
+                if i != head and vertex[i] != vertex[head] and not sunk[i]:
+                    drop[i] = True
+        start = stop
+    return drop
 
 
 def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.ndarray,
