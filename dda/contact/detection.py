@@ -43,6 +43,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+from numba import njit
 
 from dda.contact.kinematics import ContactGeometry, contact_geometry
 from dda.geometry import next_vertex_index, polygon_integrals
@@ -172,8 +173,9 @@ def bounding_boxes(x: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     """Pairs (i < j) of blocks whose boxes, grown by ``margin``, overlap (sort and sweep).
 
-    The sweep runs along the axis of larger spread of the box centres; every step is a numpy
-    operation (sort, searchsorted, repeat), so the cost is O(N log N + candidate pairs).
+    The sweep runs along the axis of larger spread of the box centres: a sort and a
+    searchsorted in numpy, then a compiled loop over the boxes each box's interval reaches,
+    so the cost is O(N log N + candidate pairs).
     """
     n = len(boxes)
     if n < 2:
@@ -186,21 +188,29 @@ def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     order = np.argsort(lo[:, axis], kind="stable")
     lo_sorted = lo[order, axis]
     stop = np.searchsorted(lo_sorted, hi[order, axis], side="right")
-    first = np.arange(1, n + 1)
-    counts = np.maximum(stop - first, 0)
-    total = int(counts.sum())
-    if total == 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    i_sorted = np.repeat(np.arange(n), counts)
-    run_start = np.repeat(np.cumsum(counts) - counts, counts)
-    j_sorted = np.repeat(first, counts) + (np.arange(total) - run_start)
-    i, j = order[i_sorted], order[j_sorted]
-    keep = (lo[i, other] <= hi[j, other]) & (lo[j, other] <= hi[i, other])
-    i, j = i[keep], j[keep]
-    out = np.empty((len(i), 2), dtype=np.int64)
-    np.minimum(i, j, out=out[:, 0])
-    np.maximum(i, j, out=out[:, 1])
-    return out
+    return _sweep(order, stop, np.ascontiguousarray(lo[:, other]),
+                  np.ascontiguousarray(hi[:, other]))
+
+
+@njit(cache=True)
+def _sweep(order, stop, lo, hi):
+    """The pairs (min, max) of sorted positions s < t < stop[s] whose intervals [lo, hi] on
+    the other axis overlap, s by s and t by t (the order of the numpy sweep)."""
+    n = order.shape[0]
+    total = 0
+    for s in range(n):
+        total += max(stop[s] - s - 1, 0)
+    out = np.empty((total, 2), dtype=np.int64)
+    m = 0
+    for s in range(n):
+        i = order[s]
+        for t in range(s + 1, stop[s]):
+            j = order[t]
+            if lo[i] <= hi[j] and lo[j] <= hi[i]:
+                out[m, 0] = min(i, j)
+                out[m, 1] = max(i, j)
+                m += 1
+    return out[:m].copy()
 
 
 @dataclass
@@ -260,10 +270,10 @@ def _directed_vertex_block_pairs(pairs, topo, x, boxes, margin):
     return vertex[inside], kk[inside]
 
 
-def _edge_runs(kblock, offsets, counts=None):
+def _edge_runs(kblock, offsets):
     """Every edge of each block of ``kblock``, block after block: the row each edge belongs
     to, the edge (CCW start index), and each run's length and start."""
-    counts = np.diff(offsets)[kblock] if counts is None else counts[kblock]
+    counts = np.diff(offsets)[kblock]
     starts = np.cumsum(counts) - counts
     pid = np.repeat(np.arange(len(kblock)), counts)
     edge = offsets[kblock][pid] + (np.arange(len(pid)) - starts[pid])
@@ -273,16 +283,6 @@ def _edge_runs(kblock, offsets, counts=None):
 def _expand_to_edges(vertex, kblock, offsets):
     pid, edge, _, _ = _edge_runs(kblock, offsets)
     return vertex[pid], edge
-
-
-def _vertex_edge_rows(vertex, kblock, topo):
-    """Every edge of block k for each (vertex, k) (kept in ``topo.memo``: the rows are the
-    same from step to step while the blocks stay near each other)."""
-    def make():
-        pid, edge, _, _ = _edge_runs(kblock, topo.offsets, topo.counts)
-        return vertex[pid], edge
-
-    return topo.memo.get(("vertex-edge", vertex.tobytes(), kblock.tobytes()), make)
 
 
 def narrow_phase(
@@ -317,27 +317,23 @@ def narrow_phase(
         pairs = broad_phase(boxes, margin)
     if len(pairs) == 0:
         return _empty_candidates(len(pairs))
-    vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, margin)
+    x = np.ascontiguousarray(x, dtype=np.float64)
     a, b, cross, scale = topo._turn(x)
-    keep = cross[vertex] < 0.0  # convex (counter-clockwise: prev -> v -> next turns left)
-    vertex, kblock = vertex[keep], kblock[keep]
+    vertex, edge, kblock, on_edge, sunk = _narrow_kernel(
+        x, topo.offsets, topo.nxt, topo.prv, np.ascontiguousarray(pairs, dtype=np.int64),
+        boxes, margin, cross < 0.0, cross > 1e-9 * scale, _outward_bisector(a, b),
+        search_distance, penetration_limit, sunk_depth)
     if len(vertex) == 0:
         return _empty_candidates(len(pairs))
-    vertex, edge = _vertex_edge_rows(vertex, kblock, topo)
+    # the kernel gives each (vertex, block)'s edges in the order they were chosen in;
+    # the candidates go by vertex, then block
+    order = np.argsort(vertex * len(topo.offsets) + kblock, kind="stable")
+    vertex, edge, kblock = vertex[order], edge[order], kblock[order]
     frame = contact_geometry(x, vertex, edge, topo.nxt)
-    on_edge = (frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL)
-    ok, sunk = _within_reach(x, topo, vertex, edge, frame, on_edge, search_distance,
-                             penetration_limit, sunk_depth)
-    row = ok.nonzero()[0]
-    if len(row) == 0:
-        return _empty_candidates(len(pairs))
-    v = vertex[row]
-    c = _Candidates(v, edge[row], frame.xi[row], topo.block[edge[row]],
-                    -np.einsum("ij,ij->i", frame.normal[row], _outward_bisector(a[v], b[v])),
-                    frame.p1[row], on_edge[row], sunk[row], row)
-    c = _one_edge_per_block(c, topo, frame.gap[row], frame.length[row],
-                            cross > 1e-9 * scale)
-    c = _drop_mirrored(c, x, topo, max(search_distance, penetration_limit))
+    score = -np.einsum("ij,ij->i", frame.normal, _outward_bisector(a[vertex], b[vertex]))
+    c = _Candidates(vertex, edge, frame.xi, kblock, score, frame.p1, on_edge[order],
+                    sunk[order], np.arange(len(vertex)))
+    c = _drop_mirrored(c, x, topo, margin)
     r = c.row
     geometry = ContactGeometry(frame.p1[r], frame.p2[r], frame.p3[r], frame.length[r],
                                frame.tau[r], frame.normal[r], frame.gap[r], frame.xi[r])
@@ -370,30 +366,162 @@ class _Candidates:
 _SIN_TOL = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
 
 
-def _within_reach(x, topo, vertex, edge, frame, on_edge, search_distance, penetration_limit,
-                  sunk_depth):
-    """Which vertex-edge pairs may be contacts (gap, inside test, end reach, entrance), and
-    which vertices are sunk (the rules of :func:`narrow_phase`)."""
-    p1, p2, p3 = frame.p1, frame.p2, frame.p3
-    normal, gap, xi = frame.normal, frame.gap, frame.xi
-    # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
-    end = np.where((xi < 0.5)[:, None], p2, p3)
-    end_distance = np.hypot(*(p1 - end).T)
-    ok = (gap <= search_distance) & (gap >= -penetration_limit)
-    sunk, reach = _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth)
-    # past the end of the edge only in a vertex-vertex case: P near the edge's end vertex
-    near_end = end_distance <= reach
-    ok &= on_edge | near_end
-    # entrance test: both edges at the vertex leave towards the outside of the edge's line.
-    # It says which edge a vertex comes through; a vertex already inside the block (a soft
-    # penalty, a deep impact) is held by the edge it is least deep behind whatever its
-    # arms do: a box corner sunk 1.2 cm into an anvil's apex and turning failed the test on
-    # the near face and was taken 3.5 cm deep behind the other, 500 J/m of spring at once
-    for nb in (topo.prv[vertex], topo.nxt[vertex]):
-        arm = x[nb] - p1
-        arm_len = np.hypot(arm[:, 0], arm[:, 1])
-        ok &= sunk | (np.einsum("ij,ij->i", arm, normal) >= -_SIN_TOL * arm_len)
-    return ok, sunk
+@njit(cache=True)
+def _edge_order_before(i, j, least_deep, on_edge, neg_score):
+    """Whether survivor i goes before survivor j (of one vertex and block): the least deep
+    first, then the foot on the edge, then the best opposed, then the block's edge order."""
+    if least_deep[i] != least_deep[j]:
+        return least_deep[i]
+    if on_edge[i] != on_edge[j]:
+        return on_edge[i]
+    if neg_score[i] != neg_score[j]:
+        return neg_score[i] < neg_score[j]
+    return i < j
+
+
+@njit(cache=True)
+def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, bisector,
+                   search_distance, penetration_limit, sunk_depth):
+    """The rules of :func:`narrow_phase` for every convex vertex of one block of a pair in the
+    other's box grown by ``margin`` (both orders of every pair) against every edge of the
+    other block: the gap range, the inside test behind an edge's line, the reach past the
+    edge's end, the entrance test, then one edge per (vertex, block) and the edges across a
+    reflex corner of the chosen one.
+
+    Returns vertex, edge, block, foot on the edge and sunk of every candidate, each
+    (vertex, block)'s in the order they are chosen in (the expressions are those of the numpy
+    version: :func:`dda.contact.kinematics.contact_frame`, an einsum of two terms as
+    ``(0 + a0 b0) + a1 b1``).
+    """
+    n_pairs = pairs.shape[0]
+    cap = 0
+    most = 0
+    for q in range(n_pairs):
+        for s in range(2):
+            m = offsets[pairs[q, s] + 1] - offsets[pairs[q, s]]
+            cap += 3 * m  # a vertex keeps at most one edge and the two across a corner
+            most = max(most, m)
+    out_v = np.empty(cap, dtype=np.int64)
+    out_e = np.empty(cap, dtype=np.int64)
+    out_k = np.empty(cap, dtype=np.int64)
+    out_on = np.empty(cap, dtype=np.bool_)
+    out_sunk = np.empty(cap, dtype=np.bool_)
+    # the survivors of one (vertex, block)
+    s_edge = np.empty(most, dtype=np.int64)
+    s_gap = np.empty(most)
+    s_len = np.empty(most)
+    s_on = np.empty(most, dtype=np.bool_)
+    s_sunk = np.empty(most, dtype=np.bool_)
+    s_neg = np.empty(most)
+    s_least = np.empty(most, dtype=np.bool_)
+    s_order = np.empty(most, dtype=np.int64)
+    gap_tie = 1e-9
+    xi_tol = 1e-9
+    sin_tol = _SIN_TOL
+    n_out = 0
+    for s in range(2):
+        for q in range(n_pairs):
+            j = pairs[q, s]
+            k = pairs[q, 1 - s]
+            xmin = boxes[k, 0] - margin
+            ymin = boxes[k, 1] - margin
+            xmax = boxes[k, 2] + margin
+            ymax = boxes[k, 3] + margin
+            for v in range(offsets[j], offsets[j + 1]):
+                px, py = x[v, 0], x[v, 1]
+                if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
+                    continue
+                if not convex[v]:
+                    continue
+                known = False  # inside test of v and k done
+                inside = False
+                depth = 0.0
+                n_s = 0
+                for e in range(offsets[k], offsets[k + 1]):
+                    f = nxt[e]
+                    p2x, p2y = x[f, 0], x[f, 1]
+                    p3x, p3y = x[e, 0], x[e, 1]
+                    dx, dy = p3x - p2x, p3y - p2y
+                    length = np.hypot(dx, dy)
+                    tx, ty = dx / length, dy / length
+                    nx, ny = -ty, tx
+                    rx, ry = px - p2x, py - p2y
+                    gap = (0.0 + rx * nx) + ry * ny
+                    if not (gap <= search_distance and gap >= -penetration_limit):
+                        continue
+                    xi = ((0.0 + rx * tx) + ry * ty) / length
+                    on_edge = xi >= -xi_tol and xi <= 1.0 + xi_tol
+                    reach = search_distance
+                    sunk = False
+                    if gap < -gap_tie * length:
+                        # behind the edge's line: only a vertex inside the block, and no
+                        # deeper behind the line than inside the block (plus sunk_depth)
+                        if not known:
+                            inside, depth, _ = _point_in_block(px, py, k, x, offsets, nxt)
+                            known = True
+                        deep = inside and depth > sunk_depth
+                        if deep:
+                            sunk = True
+                            reach = search_distance + depth
+                        if not inside and not depth <= gap_tie * length:
+                            continue
+                        if -gap > depth + sunk_depth:
+                            continue
+                    if not on_edge:
+                        if xi < 0.5:
+                            ex, ey = p2x, p2y
+                        else:
+                            ex, ey = p3x, p3y
+                        if not np.hypot(px - ex, py - ey) <= reach:
+                            continue
+                    if not sunk:
+                        entering = True
+                        for nb in (prv[v], nxt[v]):
+                            ax, ay = x[nb, 0] - px, x[nb, 1] - py
+                            arm_len = np.hypot(ax, ay)
+                            if not ((0.0 + ax * nx) + ay * ny) >= -sin_tol * arm_len:
+                                entering = False
+                        if not entering:
+                            continue
+                    s_edge[n_s] = e
+                    s_gap[n_s] = gap
+                    s_len[n_s] = length
+                    s_on[n_s] = on_edge
+                    s_sunk[n_s] = sunk
+                    s_neg[n_s] = (0.0 + nx * bisector[v, 0]) + ny * bisector[v, 1]
+                    n_s += 1
+                if n_s == 0:
+                    continue
+                # one edge: the least deep, then foot on the edge, then the best opposed
+                best = -np.inf
+                for i in range(n_s):
+                    best = max(best, s_gap[i])
+                for i in range(n_s):
+                    s_least[i] = s_gap[i] >= best - gap_tie * s_len[i]
+                    s_order[i] = i
+                for i in range(1, n_s):  # insertion sort (a handful of edges)
+                    cur = s_order[i]
+                    t = i
+                    while t > 0 and _edge_order_before(cur, s_order[t - 1], s_least, s_on,
+                                                       s_neg):
+                        s_order[t] = s_order[t - 1]
+                        t -= 1
+                    s_order[t] = cur
+                chosen = s_edge[s_order[0]]
+                # and the edges across a reflex corner of the chosen one
+                for t in range(n_s):
+                    i = s_order[t]
+                    e = s_edge[i]
+                    if t == 0 or (e == nxt[chosen] and reflex[nxt[chosen]]) or (
+                            e == prv[chosen] and reflex[chosen]):
+                        out_v[n_out] = v
+                        out_e[n_out] = e
+                        out_k[n_out] = k
+                        out_on[n_out] = s_on[i]
+                        out_sunk[n_out] = s_sunk[i]
+                        n_out += 1
+    return (out_v[:n_out].copy(), out_e[:n_out].copy(), out_k[:n_out].copy(),
+            out_on[:n_out].copy(), out_sunk[:n_out].copy())
 
 
 def _groups(keys):
@@ -409,90 +537,63 @@ def _groups(keys):
     return sorted_keys[head], order[head], inverse
 
 
-def _behind_lines(x, topo, vertex, edge, frame, ok, search_distance, sunk_depth):
-    """The inside test of vertices behind an edge's line (``ok`` is updated in place).
-
-    Returns the sunk flags and how far past an edge's end each pair still reaches.
-    """
-    gap = frame.gap
-    # a vertex behind an edge's line is in contact with it only when it is inside the
-    # block: beyond a thin block's far side it is behind the near edge's line too (gaps
-    # within round-off of zero are left alone: touching is neither inside nor out)
-    behind = (ok & (gap < -_GAP_TIE * frame.length)).nonzero()[0]
-    sunk = np.zeros(len(ok), dtype=bool)
-    reach = np.full(len(ok), search_distance)
-    if len(behind) == 0:
-        return sunk, reach
-    # once per (vertex, block), not per edge
-    nb = len(topo.offsets)
-    key, first, back = _groups(vertex[behind] * nb + topo.block[edge[behind]])
-    inside, depth, _ = _inside_depth(frame.p1[behind[first]], key % nb, x, topo,
-                                     nearest=False)
-    inside, depth = inside[back], depth[back]
-    # on the boundary (within round-off of an edge) is neither in nor out: a corner of a
-    # block sitting on an equal-width one lies on the lower block's side line
-    on_boundary = depth <= _GAP_TIE * frame.length[behind]
-    ok[behind[~inside & ~on_boundary]] = False
-    # nor deeper behind that line than the vertex is inside the block, give or take
-    # sunk_depth: a corner that has just entered a box through its top face is 3.8 cm
-    # behind the line of the box's side face, and a spring there throws the box off
-    too_deep = -gap[behind] > depth + sunk_depth
-    ok[behind[too_deep]] = False
-    deep = inside & (depth > sunk_depth)
-    sunk[behind[deep]] = True
-    # a vertex sunk into a block's reflex corner is nearest to the corner itself, past
-    # the end of both its edges: it reaches them as far as it is deep
-    reach[behind[deep]] += depth[deep]
-    return sunk, reach
-
-
-def _one_edge_per_block(c: _Candidates, topo, gap, length, reflex) -> _Candidates:
-    """One edge per (vertex, block): the one the vertex is least deep behind (the signed
-    distance to a convex block is the largest of the gaps to its edges' lines), then one
-    whose foot is on it, then the best opposed; and across a reflex corner the other edge.
-    ``reflex`` says which vertices are reflex (:meth:`VertexTopology.reflex`). The result is
-    sorted by vertex, then block."""
-    key = c.vertex * len(topo.offsets) + c.kblock
-    uniq, first_of, group = _groups(key)
-    if len(uniq) == len(key):  # one edge each already: nothing to choose, only the order
-        return c.take(first_of)
-    best = np.full(len(first_of), -np.inf)
-    np.maximum.at(best, group, gap)
-    least_deep = gap >= best[group] - _GAP_TIE * length
-    c = c.take(np.lexsort((-c.score, ~c.on_edge, ~least_deep, c.kblock, c.vertex)))
-    first = np.ones(len(c.vertex), dtype=bool)
-    first[1:] = (c.vertex[1:] != c.vertex[:-1]) | (c.kblock[1:] != c.kblock[:-1])
-    # at a reflex vertex of block k the solid is the union of its two edges' half-planes, so
-    # a vertex near that corner is near both edges at once: keep the edge across the corner
-    # from the chosen one too (a block sliding into a notch would otherwise lose its seat on
-    # the face as soon as the notch's wall becomes the least deep edge)
-    chosen = c.edge[first][np.cumsum(first) - 1]
-    keep = first | ((c.edge == topo.nxt[chosen]) & reflex[topo.nxt[chosen]]) | (
-        (c.edge == topo.prv[chosen]) & reflex[chosen])
-    return c.take(keep)
-
-
 def _drop_mirrored(c: _Candidates, x, topo, reach) -> _Candidates:
     """Vertex-vertex: keep one of the mirrored pairs (P on an edge at Q, Q on an edge at P)."""
-    vertex = c.vertex
-    near_end = np.where(c.xi < 0.5, topo.nxt[c.edge], c.edge)
-    vv = _norm(c.p1 - x[near_end]) <= reach
-    if not vv.any():
-        return c
-    idx = vv.nonzero()[0]
-    a = np.minimum(vertex[idx], near_end[idx])
-    b = np.maximum(vertex[idx], near_end[idx])
-    order = np.lexsort((vertex[idx], -c.score[idx], ~c.on_edge[idx], b, a))
-    a, b, idx = a[order], b[order], idx[order]
-    head = np.ones(len(idx), dtype=bool)
-    head[1:] = (a[1:] != a[:-1]) | (b[1:] != b[:-1])
-    kept_vertex = vertex[idx][head][np.cumsum(head) - 1]
-    # only the mirror image goes: the same vertex in a reflex corner keeps both edges
-    dup = ~head & (vertex[idx] != kept_vertex)
-    dup &= ~c.sunk[idx]  # a sunk vertex keeps its own spring
-    drop = np.zeros(len(vertex), dtype=bool)
-    drop[idx[dup]] = True
-    return c.take(~drop)
+    drop = _mirrored_kernel(c.vertex, c.edge, c.xi, c.p1, c.score, c.on_edge, c.sunk, x,
+                            topo.nxt, float(reach))
+    return c.take(~drop) if drop.any() else c
+
+
+@njit(cache=True)
+def _mirrored_kernel(vertex, edge, xi, p1, score, on_edge, sunk, x, nxt, reach):
+    """Which candidates :func:`_drop_mirrored` drops: of the vertex-vertex cases (P within
+    ``reach`` of the edge's end Q nearer its foot) with the same two vertices, the first by
+    (foot on the edge, best opposed, lower vertex, order) is kept, and of the others those
+    of the other vertex that are not sunk go."""
+    n = vertex.shape[0]
+    n_vertices = x.shape[0]
+    drop = np.zeros(n, dtype=np.bool_)
+    idx = np.empty(n, dtype=np.int64)
+    key = np.empty(n, dtype=np.int64)
+    m = 0
+    for i in range(n):
+        q = nxt[edge[i]] if xi[i] < 0.5 else edge[i]
+        dx = p1[i, 0] - x[q, 0]
+        dy = p1[i, 1] - x[q, 1]
+        if np.sqrt(dx * dx + dy * dy) <= reach:
+            idx[m] = i
+            key[m] = min(vertex[i], q) * n_vertices + max(vertex[i], q)
+            m += 1
+    if m == 0:
+        return drop
+    idx = idx[:m]
+    key = key[:m]
+    order = np.argsort(key, kind="mergesort")
+    start = 0
+    while start < m:
+        stop = start + 1
+        while stop < m and key[order[stop]] == key[order[start]]:
+            stop += 1
+        if stop - start > 1:
+            head = idx[order[start]]
+            for t in range(start + 1, stop):
+                i = idx[order[t]]
+                if on_edge[i] != on_edge[head]:
+                    better = on_edge[i]
+                elif score[i] != score[head]:
+                    better = score[i] > score[head]
+                else:
+                    better = vertex[i] < vertex[head]
+                if better:
+                    head = i
+            for t in range(start, stop):
+                i = idx[order[t]]
+                # only the mirror image goes: the same vertex in a reflex corner keeps both
+                # edges; a sunk vertex keeps its own spring
+                if i != head and vertex[i] != vertex[head] and not sunk[i]:
+                    drop[i] = True
+        start = stop
+    return drop
 
 
 def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.ndarray,
@@ -503,54 +604,95 @@ def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.n
 
     Inside is the even-odd rule on a ray towards +x (half-open in y, so a ray through a
     vertex counts once): exact for non-convex blocks. The distance is the least distance to
-    an edge segment.
+    an edge segment; the nearest edge is the first (in the block's order) at that distance.
     """
     if len(p) == 0:
         z = np.zeros(0, dtype=np.int64)
         return np.zeros(0, dtype=bool), np.zeros(0), z
-    pid, edge, _, starts = _edge_runs(kblock, offsets)
-    return _inside_depth_of_runs(p, x, pid, edge, nxt[edge], starts, nearest)
+    inside, depth, near = _inside_depth_kernel(
+        np.ascontiguousarray(p, dtype=np.float64), np.ascontiguousarray(kblock, dtype=np.int64),
+        np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
+        np.ascontiguousarray(nxt, dtype=np.int64))
+    return inside, depth, (near if nearest else None)
 
 
-def _inside_depth(p, kblock, x, topo: VertexTopology, nearest: bool = True):
-    """:func:`inside_depth` with the edge runs of ``kblock`` kept in ``topo.memo``."""
-    if len(p) == 0:
-        return inside_depth(p, kblock, x, topo.offsets, topo.nxt, nearest)
-
-    def make():
-        pid, edge, _, starts = _edge_runs(kblock, topo.offsets, topo.counts)
-        return pid, edge, topo.nxt[edge], starts
-
-    runs = topo.memo.get(("edge-runs", kblock.tobytes()), make)
-    return _inside_depth_of_runs(p, x, *runs, nearest)
-
-
-def _inside_depth_of_runs(p, x, pid, edge, edge_end, starts, nearest):
-    q = p[pid]
-    a = x[edge]
-    b = x[edge_end]
-    ab = b - a
-    qa = q - a
-    # compare the end points themselves: a + (b - a) need not be b in floating point, and a
-    # ray through a vertex would then count it twice or not at all
-    straddles = (a[:, 1] > q[:, 1]) != (b[:, 1] > q[:, 1])
-    dy = np.where(straddles, ab[:, 1], 1.0)
-    crossing = straddles & (q[:, 0] < a[:, 0] + qa[:, 1] * ab[:, 0] / dy)
-    len2 = np.einsum("ij,ij->i", ab, ab)
-    t = np.minimum(np.maximum(np.einsum("ij,ij->i", qa, ab) / np.maximum(len2, 1e-300), 0.0),
-                   1.0)
-    dist = np.hypot(*(q - (a + t[:, None] * ab)).T)
-    inside = np.bitwise_xor.reduceat(crossing, starts)  # an odd number of crossings
-    depth = np.minimum.reduceat(dist, starts)
-    if not nearest:
-        return inside, depth, None
-    # the nearest edge: the first of its run at the run's least distance
-    idx = (dist == depth[pid]).nonzero()[0]
-    first = np.ones(len(idx), dtype=bool)
-    first[1:] = pid[idx[1:]] != pid[idx[:-1]]
-    near = np.empty(len(p), dtype=np.int64)
-    near[pid[idx[first]]] = edge[idx[first]]
+@njit(cache=True)
+def _point_in_block(qx, qy, k, x, offsets, nxt):
+    """Inside (even-odd), depth (least distance to an edge segment) and nearest edge of the
+    point (qx, qy) and block k, each edge evaluated as the numpy expressions did (an einsum
+    of two terms is ``(0 + a0 b0) + a1 b1``)."""
+    inside = False
+    depth = np.inf
+    near = -1
+    for e in range(offsets[k], offsets[k + 1]):
+        f = nxt[e]
+        ax, ay = x[e, 0], x[e, 1]
+        bx, by = x[f, 0], x[f, 1]
+        abx, aby = bx - ax, by - ay
+        qax, qay = qx - ax, qy - ay
+        # compare the end points themselves: a + (b - a) need not be b in floating point,
+        # and a ray through a vertex would then count it twice or not at all
+        if (ay > qy) != (by > qy):
+            if qx < ax + qay * abx / aby:
+                inside = not inside
+        len2 = (0.0 + abx * abx) + aby * aby
+        t = ((0.0 + qax * abx) + qay * aby) / max(len2, 1e-300)
+        t = min(max(t, 0.0), 1.0)
+        dist = np.hypot(qx - (ax + t * abx), qy - (ay + t * aby))
+        if near < 0 or dist < depth:
+            depth = dist
+            near = e
     return inside, depth, near
+
+
+@njit(cache=True)
+def _inside_depth_kernel(p, kblock, x, offsets, nxt):
+    """:func:`inside_depth` of every point p[i] and block kblock[i]."""
+    n = p.shape[0]
+    inside = np.empty(n, dtype=np.bool_)
+    depth = np.empty(n)
+    near = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        inside[i], depth[i], near[i] = _point_in_block(p[i, 0], p[i, 1], kblock[i], x, offsets,
+                                                       nxt)
+    return inside, depth, near
+
+
+@njit(cache=True)
+def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth):
+    """Every corner (``corner[v]``) of one block of a pair in the other's box inside that
+    block deeper than ``min_depth``: vertex, block, depth and nearest edge, the pairs in the
+    order (j, k) first, then (k, j) (the guard's :func:`vertex_penetrations`; kept in this
+    file with :func:`_point_in_block`, whose cache it shares)."""
+    n_pairs = pairs.shape[0]
+    cap = 0
+    for q in range(n_pairs):
+        for s in range(2):
+            cap += offsets[pairs[q, s] + 1] - offsets[pairs[q, s]]
+    out_v = np.empty(cap, dtype=np.int64)
+    out_k = np.empty(cap, dtype=np.int64)
+    out_d = np.empty(cap)
+    out_e = np.empty(cap, dtype=np.int64)
+    n_out = 0
+    for s in range(2):
+        for q in range(n_pairs):
+            j = pairs[q, s]
+            k = pairs[q, 1 - s]
+            xmin, ymin, xmax, ymax = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
+            for v in range(offsets[j], offsets[j + 1]):
+                px, py = x[v, 0], x[v, 1]
+                if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
+                    continue
+                if not corner[v]:
+                    continue
+                inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
+                if inside and depth > min_depth:
+                    out_v[n_out] = v
+                    out_k[n_out] = k
+                    out_d[n_out] = depth
+                    out_e[n_out] = near
+                    n_out += 1
+    return out_v[:n_out].copy(), out_k[:n_out].copy(), out_d[:n_out].copy(), out_e[:n_out].copy()
 
 
 def _strictly_inside(p, kblock, x, offsets, nxt, tol):

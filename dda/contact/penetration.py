@@ -24,8 +24,7 @@ import numpy as np
 from dda.contact.contacts import OPEN
 from dda.contact.detection import (
     VertexTopology,
-    _directed_vertex_block_pairs,
-    _inside_depth,
+    _corners_inside_kernel,
     bounding_boxes,
     broad_phase,
 )
@@ -93,16 +92,14 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
         pairs = broad_phase(boxes, 0.0)
     if len(pairs) == 0:
         return _empty()
-    vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
     # a vertex between collinear edges is a point of a side, not a corner: where two blocks
     # overlap edge to edge it is inside the other, and the corners' springs hold the overlap
-    corner = ~topo.straight(x, vertex)
-    vertex, kblock = vertex[corner], kblock[corner]
-    if len(vertex) == 0:
-        return _empty()
-    inside, depth, nearest = _inside_depth(x[vertex], kblock, x, topo)
-    keep = inside & (depth > min_depth)
-    return Penetrations(vertex[keep], kblock[keep], depth[keep], nearest[keep])
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    corner = ~topo.straight(x)
+    vertex, kblock, depth, nearest = _corners_inside_kernel(
+        x, offsets, topo.nxt, np.ascontiguousarray(pairs, dtype=np.int64), boxes, corner,
+        float(min_depth))
+    return Penetrations(vertex, kblock, depth, nearest)
 
 
 def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
