@@ -93,3 +93,18 @@ def shaken_block_scene(phi, amplitude, freq=2.0):
                                   friction=CoulombSingle(phi=phi)))
     scene.shake(table, acceleration=lambda t: (amplitude * np.sin(2 * np.pi * freq * t), 0.0))
     return scene, table, top
+
+
+def stack_scene(n):
+    """The N x N stack of 1 m squares on a fixed base of ``benchmarks/stacks.py`` (E 10 GPa,
+    p 1e10 N/m, phi 35 degrees)."""
+    stone = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-1.0, -1.0), (n + 1.0, -1.0), (n + 1.0, 0.0), (-1.0, 0.0)], stone,
+                    fixed=True)
+    for i in range(n):
+        for j in range(n):
+            scene.add_block([(j, i), (j + 1, i), (j + 1, i + 1), (j, i + 1)], stone)
+    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                                  friction=CoulombSingle(phi=35.0)))
+    return scene

@@ -5,22 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 import dda
-from dda.contact import CoulombSingle, JointMaterial
-from dda.materials import LinearElastic
 from dda.solvers import LegacyPullBack
-
-
-def stack(n):
-    rock = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
-    scene = dda.Scene(gravity=9.81)
-    scene.add_block([(-1.0, -1.0), (n + 1.0, -1.0), (n + 1.0, 0.0), (-1.0, 0.0)], rock,
-                    fixed=True)
-    for i in range(n):
-        for j in range(n):
-            scene.add_block([(j, i), (j + 1, i), (j + 1, i + 1), (j, i + 1)], rock)
-    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
-                                  friction=CoulombSingle(phi=35.0)))
-    return scene
+from tests.conftest import stack_scene
 
 
 def test_a_touching_contact_does_not_cycle_until_the_pass_limit():
@@ -28,7 +14,7 @@ def test_a_touching_contact_does_not_cycle_until_the_pass_limit():
     of a side joint pulled 6.4e-10 m (6.4 N) closed and penetrated 1.7e-9 m (17 N) open, and
     OPEN-CLOSE switched it 30 times, then cut the step. It now stays closed: no cut, and no
     step needs more than a few passes."""
-    sim = dda.Simulation(stack(10), dt=1e-3, solver=LegacyPullBack(), max_open_close=30)
+    sim = dda.Simulation(stack_scene(10), dt=1e-3, solver=LegacyPullBack(), max_open_close=30)
     r = sim.run(0.012, progress=False)
     assert r.stats.cuts == []
     assert np.max(r.stats["open_close_passes"]) <= 8

@@ -12,6 +12,7 @@ import scipy.sparse as sp
 import dda
 from dda.solvers import LegacyPullBack, NewtonRaphson
 from dda.solvers import sparse_factor as sf
+from tests.conftest import stack_scene
 
 pardiso = pytest.mark.skipif(not sf._pardiso_available(), reason="pypardiso/MKL not installed")
 
@@ -93,22 +94,6 @@ def test_backend_choice_by_environment(monkeypatch):
         sf.default_backend()
 
 
-def stack(n):
-    from dda.contact import CoulombSingle, JointMaterial
-    from dda.materials import LinearElastic
-
-    rock = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
-    scene = dda.Scene(gravity=9.81)
-    scene.add_block([(-1.0, -1.0), (n + 1.0, -1.0), (n + 1.0, 0.0), (-1.0, 0.0)], rock,
-                    fixed=True)
-    for i in range(n):
-        for j in range(n):
-            scene.add_block([(j, i), (j + 1, i), (j + 1, i + 1), (j, i + 1)], rock)
-    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
-                                  friction=CoulombSingle(phi=35.0)))
-    return scene
-
-
 @pardiso
 @pytest.mark.parametrize("solver", [LegacyPullBack, NewtonRaphson])
 def test_a_stack_settles_alike_with_either_backend(monkeypatch, solver):
@@ -118,7 +103,7 @@ def test_a_stack_settles_alike_with_either_backend(monkeypatch, solver):
     for backend in ("superlu", "pardiso"):
         monkeypatch.setenv("DDA_SPARSE_SOLVER", backend)
         s = solver()
-        sim = dda.Simulation(stack(9), dt=1e-3, solver=s, max_open_close=30)
+        sim = dda.Simulation(stack_scene(9), dt=1e-3, solver=s, max_open_close=30)
         r = sim.run(0.015, progress=False)
         out[backend] = (sim.committed.x.copy(), np.asarray(r.stats["open_close_passes"]))
         factorizations, analyses = s.factors().counts
