@@ -11,16 +11,17 @@ cut, nearly all because OPEN-CLOSE did not settle in 30 passes) and the face blo
 (median) and 49 mm (most) from where they started relative to the base. The shaken slope is
 chaotic at this level: with SuperLU instead of PARDISO (round-off) and without the rule that
 keeps a touching contact from cycling (issue 19) it was 3,026 steps, 313 cut, 25 and 43 mm, in
-6 minutes; 28 and 53 mm before the contact-integrity fixes of issue 17. It warns that the penalty is stiff for dt
-(``dda.PenaltyWarning``); that advice is not yet checked on this scene. An order-of-magnitude
-check, not a validation: on the 25 degree bedding with phi 35 degrees, a block starts to slide
-out of the face once the base pushes into the slope at more than tan(35 - 25) = 0.18 g, which
-0.3 g exceeds for about 0.15 s of the run. (Before contact detection took the edge a vertex is
-least deep behind, the same run threw face blocks out at up to 14 m/s and they ended 0.49 m
-(median) and 3.6 m from where they started.) An energy audit of the default run: the base and
-the back wall put 180 kJ/m into the blocks through their contacts, the blocks gain 110 kJ/m,
-and at no step do they hold more than they started with plus that work
-(``tests/stability`` checks the same on a 28-block cut, ``KnownMotionWork``).
+6 minutes; 28 and 53 mm before the contact-integrity fixes of issue 17. It warns that the
+penalty is stiff for dt (``dda.PenaltyWarning``); that advice is not yet checked on this scene.
+An order-of-magnitude check, not a validation: on the 25 degree bedding with phi 35 degrees, a
+block starts to slide out of the face once the base pushes into the slope at more than tan(35 -
+25) = 0.18 g, which 0.3 g exceeds for about 0.15 s of the run. (Before contact detection took
+the edge a vertex is least deep behind, the same run threw face blocks out at up to 14 m/s and
+they ended 0.49 m (median) and 3.6 m from where they started.) An energy audit of the default
+run (before issue 19's changes, not redone since): the base and the back wall put 180 kJ/m into
+the blocks through their contacts, the blocks gain 110 kJ/m, and at no step do they hold more
+than they started with plus that work (``tests/stability`` checks the same on a 28-block cut,
+``KnownMotionWork``).
 
 Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` and prints the blocks, how far the blocks of
 the face moved, and the cost profile.
