@@ -64,7 +64,8 @@ class StepProblem:
             args = (self.free, self.element.bj, self.element.bk, self.rigid)
             if self.factors is None:
                 return SystemPattern(*args)
-            return self.factors.kept("pattern", args, lambda: SystemPattern(*args))
+            return self.factors.kept("pattern", args,
+                                     lambda: SystemPattern(*args, cache=self.factors))
 
 
 @dataclass

@@ -43,7 +43,7 @@ class SystemPattern:
         system (``unknowns`` counts what is solved for).
     """
 
-    def __init__(self, free, bj, bk, rigid=None):
+    def __init__(self, free, bj, bk, rigid=None, cache=None):
         n_blocks = len(free)
         slot = np.full(n_blocks, -1, dtype=np.int64)
         self.free_blocks = free_blocks = np.flatnonzero(free)
@@ -89,7 +89,7 @@ class SystemPattern:
             base = 6 * br * n + 6 * bc
             col_step = np.ones_like(base)
         else:
-            base, col_step = self._csc_layout(br, bc, len(free_blocks))
+            base, col_step = self._csc_layout(br, bc, len(free_blocks), cache)
         self._entry_layout = (base, col_step)
         nf = len(free_blocks)
         self.block_base, self.block_step = base[:nf], col_step[:nf]
@@ -105,26 +105,42 @@ class SystemPattern:
         if self.keep is not None and n > DENSE_LIMIT:
             self._kept_structure()
 
-    def _csc_layout(self, br, bc, nf):
+    def _csc_layout(self, br, bc, nf, cache=None):
         """Compressed sparse columns: block entries sorted by block column, then block row;
         within block column J, scalar column 6J + j lists the 6 rows of each block in turn.
-        Sets the structure and returns each block entry's base and column step."""
+        Sets the structure and returns each block entry's base and column step.
+
+        The structure depends on the coupled block pairs alone: with a ``cache`` (a
+        :class:`dda.solvers.sparse_factor.FactorSet`) the last one is kept for the next
+        step whose contacts couple the same blocks (the same arrays, so the sparse solver
+        sees the same pattern at once)."""
         ub, inverse = np.unique(bc * nf + br, return_inverse=True)
+        if cache is None:
+            layout = self._csc_structure(ub, nf)
+        else:
+            layout = cache.kept("csc", (np.array([nf]), ub),
+                                lambda: self._csc_structure(ub, nf))
+        self.nnz, self.indices, self.indptr, base, step = layout
+        self.row_step = 1
+        return base[inverse], step[inverse]
+
+    @staticmethod
+    def _csc_structure(ub, nf):
+        """(nnz, indices, indptr, base, column step) of the unique block entries ``ub``
+        (column * nf + row, sorted)."""
         ucol, urow = ub // nf, ub % nf
         count = np.bincount(ucol, minlength=nf)
         bptr = np.concatenate([[0], np.cumsum(count)])
         rank = np.arange(len(ub)) - bptr[ucol]
-        self.nnz = 36 * len(ub)
-        self.row_step = 1
+        nnz = 36 * len(ub)
         base = 36 * bptr[ucol] + 6 * rank
         step = 6 * count[ucol]
         pos = base[:, None, None] + _J6 * step[:, None, None] + _I6
-        indices = np.empty(self.nnz, dtype=np.int32)
+        indices = np.empty(nnz, dtype=np.int32)
         indices[pos.reshape(-1)] = (6 * urow[:, None, None] + _I6 + 0 * _J6).reshape(-1)
-        self.indices = indices
         col_start = 36 * bptr[:-1][:, None] + np.arange(6)[None, :] * 6 * count[:, None]
-        self.indptr = np.append(col_start.reshape(-1), self.nnz).astype(np.int32)
-        return base[inverse], step[inverse]
+        indptr = np.append(col_start.reshape(-1), nnz).astype(np.int32)
+        return nnz, indices, indptr, base, step
 
     def _kept_structure(self):
         """The CSC structure of the unknowns (rigid blocks' strain rows and columns left
