@@ -22,33 +22,25 @@ from __future__ import annotations
 import argparse
 import cProfile
 import pstats
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
 import dda
-from dda.contact import CoulombSingle, JointMaterial
-from dda.materials import LinearElastic
+from dda.contact import CoulombSingle
 
-ROCK = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
 SEED_STEPS = 160_000
 
 
-def incline(slope=30.0, phi=30.0, kick=1.0):
-    """A 0.3 m block kicked down a fixed 30 degree incline at ``kick`` m/s (phi = slope: it
-    slides on at about that speed), joint penalty 1e10 (tests/stability/scenes.py)."""
-    scene = dda.Scene(gravity=9.81)
-    th = np.radians(slope)
-    length = 3.0
-    scene.add_block([(0, 0), (length * np.cos(th), 0), (length * np.cos(th), length * np.sin(th))],
-                    ROCK, fixed=True, name="slope")
-    t, n = np.array([np.cos(th), np.sin(th)]), np.array([-np.sin(th), np.cos(th)])
-    foot = 2.0 * t
-    block = [foot, foot + 0.3 * t, foot + 0.3 * t + 0.3 * n, foot + 0.3 * n]
-    scene.add_block([tuple(p) for p in block], ROCK, velocity=tuple(-kick * t))
-    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
-                                  friction=CoulombSingle(phi=phi)))
-    return scene
+def incline():
+    """A 0.3 m block kicked down a fixed 30 degree incline at 1 m/s with phi 30 degrees (it
+    slides on at about that speed), joint penalty 1e10: ``tests/stability/scenes.py``'s."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+    from tests.stability.scenes import incline as scene
+
+    return scene(CoulombSingle(phi=30.0))[0]
 
 
 def measure(solver, steps, warmup, dt=1e-4, record_every=1):
