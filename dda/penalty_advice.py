@@ -11,9 +11,11 @@ would do and why:
   ``p depth / (TARGET_DEPTH h)``; an impact's depth falls only as ``1 / sqrt(p)``, so it may
   need up to the square of that ratio.
 - **too stiff**: ``STIFF_CUTS`` (20) steps or more cut because contacts would not settle, and
-  at least ``STIFF_SHARE`` (10 %) of the steps taken. The spring is measured against the
-  inertia of the lightest free block, ``k_m = 2 m / dt^2`` (the mass term of Newmark's
-  effective stiffness, METHOD.md section 2): a penalty near ``STIFF_RATIO`` (10) times
+  either at least ``STIFF_SHARE`` (10 %) of the steps taken, or steps that average at most
+  ``STIFF_HELD`` (1/8) of the dt asked for (the step control waits longer and longer before it
+  tries a cut dt doubled again, so a run held at a small dt has few cuts). The spring is
+  measured against the inertia of the lightest free block, ``k_m = 2 m / dt^2`` (the mass term
+  of Newmark's effective stiffness, METHOD.md section 2): a penalty near ``STIFF_RATIO`` (10) times
   ``k_m``, or a step ``dt = sqrt(2 STIFF_RATIO m / p)``, keeps the spring from dominating.
 """
 
@@ -32,6 +34,7 @@ TARGET_DEPTH = 0.01
 STIFF_CUTS = 20
 STIFF_SHARE = 0.1
 STIFF_RATIO = 10.0
+STIFF_HELD = 1.0 / 8.0
 
 # the reasons of a dt cut that come from the contacts (see Simulation and the solvers)
 _CONTACT_REASONS = ("OPEN-CLOSE did not settle", "Newton-Raphson did not converge",
@@ -95,7 +98,7 @@ def soft_penalty_advice(depth: np.ndarray, half_width: np.ndarray, penalty: np.n
 
 
 def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt: float,
-                         name: str) -> str | None:
+                         name: str, mean_dt: float | None = None) -> str | None:
     """The warning for a penalty too stiff for the step size, or None.
 
     Parameters
@@ -106,6 +109,7 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
     mass : the lightest free block's mass (kg per m)
     dt : the step size asked for (s)
     name : that block's name
+    mean_dt : the mean size of the steps taken (s), if known
 
     Examples
     --------
@@ -116,15 +120,17 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
     lightest free block). A penalty of about 2e9 N/m at dt = 0.001 s, or dt = 1.41e-05 s at
     this penalty, keeps the springs from dominating the step.
     """
-    if cuts < STIFF_CUTS or cuts < STIFF_SHARE * steps:
+    held = mean_dt is not None and mean_dt <= STIFF_HELD * dt
+    if cuts < STIFF_CUTS or (cuts < STIFF_SHARE * steps and not held):
         return None
     inertia = 2.0 * mass / dt**2
     ratio = penalty / inertia
     if ratio <= STIFF_RATIO:
         return None
     dt_ok = math.sqrt(2.0 * STIFF_RATIO * mass / penalty)
-    return (f"the step was cut {cuts} times in {steps} steps because the contacts would not "
-            f"settle: the normal penalty {penalty:.3g} N/m is {ratio:.2g} times the inertia "
+    mean = f" (they average dt = {mean_dt:.3g} s)" if held else ""
+    return (f"the step was cut {cuts} times in {steps} steps{mean} because the contacts would "
+            f"not settle: the normal penalty {penalty:.3g} N/m is {ratio:.2g} times the inertia "
             f"2 m / dt^2 = {inertia:.3g} N/m of {name} (the lightest free block). A penalty of "
             f"about {_nice(STIFF_RATIO * inertia)} N/m at dt = {dt:g} s, or dt = {dt_ok:.3g} s "
             "at this penalty, keeps the springs from dominating the step.")
@@ -137,11 +143,13 @@ class PenaltyAdvisor:
     ----------
     model : dda.model.Model
     dt : the step size asked for (s)
+    start : the time the steps are counted from (s)
     """
 
-    def __init__(self, model, dt: float):
+    def __init__(self, model, dt: float, start: float = 0.0):
         self.model = model
         self.dt = dt
+        self.start = start
         self.warned: set[str] = set()
 
     def observe(self, state, steps: int, contact_cuts: int) -> None:
@@ -150,8 +158,8 @@ class PenaltyAdvisor:
         if "soft" not in self.warned:
             self._check_soft(state.contacts)
         if ("stiff" not in self.warned and contact_cuts >= STIFF_CUTS
-                and contact_cuts >= STIFF_SHARE * steps and self.model.free.any()):
-            self._check_stiff(steps, contact_cuts)
+                and self.model.free.any()):
+            self._check_stiff(steps, contact_cuts, (state.time - self.start) / max(steps, 1))
 
     def _check_soft(self, c):
         model = self.model
@@ -168,13 +176,14 @@ class PenaltyAdvisor:
             self.warned.add("soft")
             warnings.warn(message, PenaltyWarning, stacklevel=6)
 
-    def _check_stiff(self, steps, contact_cuts):
+    def _check_stiff(self, steps, contact_cuts, mean_dt):
         model = self.model
         mass = model.density * model.size**2  # the blocks' masses at the start
         light = int(np.flatnonzero(model.free)[np.argmin(mass[model.free])])
         message = stiff_penalty_advice(contact_cuts, steps,
                                        float(model.joints.normal_penalty.max()),
-                                       float(mass[light]), self.dt, model.block_label(light))
+                                       float(mass[light]), self.dt, model.block_label(light),
+                                       mean_dt)
         if message:
             self.warned.add("stiff")
             warnings.warn(message, PenaltyWarning, stacklevel=6)

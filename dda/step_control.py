@@ -4,6 +4,14 @@ A refused step (:func:`dda.step.step`) is tried again: first with a wider contac
 it moved farther than predicted (at most ``max_widenings`` times), then with half the step
 size. After ``grow_after`` accepted steps in a row a cut step size doubles again, up to the
 size asked for. A step cut more than ``max_cuts`` times in a row ends the run.
+
+A doubled step size that is cut again for its contacts (OPEN-CLOSE or Newton did not settle)
+before it has made ``grow_after`` steps doubles the wait before the next try (up to
+``max_wait`` steps); one that holds for ``grow_after`` steps resets it. Cuts for a block that
+moved too far do not: those end when the block slows down. Without this back-off a run whose
+contacts cannot settle at twice its step size spends a cut every ``grow_after + 1`` steps
+trying (the 311-block cut slope of ``examples/jointed_slope.py``: 10% of its steps, each a
+failed step of up to ``max_open_close`` passes).
 """
 
 from __future__ import annotations
@@ -26,18 +34,22 @@ class StepControl:
     max_cuts : cuts of one step in a row before the run stops
     grow_after : accepted steps in a row after which a cut step size doubles
     max_widenings : retries of one step with a wider search before dt is cut instead
+    max_wait : the longest wait (accepted steps) before a cut step size is tried doubled again
     """
 
     dt: float
     max_cuts: int = 12
     grow_after: int = 8
     max_widenings: int = 2
+    max_wait: int = 256
     # what the control has seen so far
     dt_now: float | None = None
     good_steps: int = 0
     search_hint: float = 0.0
     steps: int = 0  # accepted steps
     contact_cuts: int = 0  # steps cut because the contacts would not settle
+    wait: int = 0  # accepted steps before the next doubling (0: grow_after)
+    probing: bool = False  # the step size was just doubled and has not held yet
 
     def __post_init__(self):
         if self.dt_now is None:
@@ -61,6 +73,10 @@ class StepControl:
         """After a refused try that is not widened: halve the step size."""
         if contact_cut(reason):
             self.contact_cuts += 1
+        if self.probing and contact_cut(reason):
+            # the contacts did not settle at the doubled size: wait longer before the next try
+            self.wait = min(self.max_wait, 2 * self._wait())
+        self.probing = False
         self.dt_now = dt / 2.0
         self.good_steps = 0
 
@@ -69,9 +85,16 @@ class StepControl:
         self.search_hint = 0.0
         self.steps += 1
         self.good_steps += 1
-        if self.dt_now < self.dt and self.good_steps >= self.grow_after:
+        if self.probing and self.good_steps >= self.grow_after:  # the doubled size held
+            self.probing = False
+            self.wait = self.grow_after
+        if self.dt_now < self.dt and self.good_steps >= self._wait():
             self.dt_now = min(self.dt, 2.0 * self.dt_now)
             self.good_steps = 0
+            self.probing = True
+
+    def _wait(self) -> int:
+        return max(self.wait, self.grow_after)
 
     def check_can_go_on(self, report, tries: int, dt: float, committed) -> None:
         """After a cut: raise :class:`dda.SimulationError` when cutting dt further cannot

@@ -126,3 +126,48 @@ def test_run_tells_a_callback_every_committed_step():
         0.01, callback=lambda state, report: seen.append((state.time, report.converged)))
     assert [t for t, _ in seen] == pytest.approx(list(result.time[1:]))
     assert all(ok for _, ok in seen)
+
+
+def test_a_doubled_step_size_that_fails_at_once_waits_longer_before_the_next_try():
+    """Where the contacts cannot settle at twice the working step size, every try costs a
+    failed step: the wait before the next try doubles (up to max_wait) and resets once a
+    doubled size holds for grow_after steps."""
+    control = StepControl(dt=1e-3)
+    g = control.grow_after
+    control.cut(1e-3, "OPEN-CLOSE did not settle in 30 passes")
+    waits = []
+    for _ in range(4):  # grow back, fail at once, again and again
+        steps = 0
+        while control.dt_now == 5e-4:
+            control.accepted()
+            steps += 1
+        waits.append(steps)
+        control.cut(control.dt_now, "OPEN-CLOSE did not settle in 30 passes")
+    assert waits == [g, 2 * g, 4 * g, 8 * g]
+    # the doubled size holds for grow_after steps: the wait is back to grow_after
+    for _ in range(16 * g):
+        control.accepted()
+    assert control.dt_now == 1e-3 and control.probing
+    for _ in range(g):
+        control.accepted()
+    assert not control.probing and control._wait() == g
+    control.cut(1e-3, "OPEN-CLOSE did not settle in 30 passes")
+    for _ in range(g):
+        control.accepted()
+    assert control.dt_now == 1e-3
+    # the wait never grows beyond max_wait
+    control = StepControl(dt=1e-3, max_wait=3 * g)
+    control.cut(1e-3, "OPEN-CLOSE did not settle in 30 passes")
+    for _ in range(6):
+        while control.dt_now == 5e-4:
+            control.accepted()
+        control.cut(control.dt_now, "OPEN-CLOSE did not settle in 30 passes")
+    assert control._wait() == 3 * g
+    # a block that moved too far does not make the wait longer: it slows down
+    control = StepControl(dt=1e-3)
+    control.cut(1e-3, "OPEN-CLOSE did not settle in 30 passes")
+    for _ in range(3):
+        while control.dt_now == 5e-4:
+            control.accepted()
+        control.cut(control.dt_now, "a vertex of 'shot' moved 1 m")
+    assert control._wait() == g
