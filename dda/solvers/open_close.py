@@ -39,11 +39,12 @@ Three rules keep the iteration honest (each was needed; tests/test_dynamics.py s
 A contact that has been opened and closed again within the step and would open once more,
 pulled by less than ``CYCLE_TENSION`` of the largest normal force, stays closed for the rest of
 the step: it has no consistent state (closed, its spring pulls; open, it penetrates), and it
-would otherwise switch every pass until the pass limit cuts the step. Such a contact counts as
-settled whatever its lagged normal force. In the 10 x 10 stack of ``benchmarks/stacks.py`` one
-pulled 6.4 N closed and penetrated 1.7e-9 m open; on the faces of the shaken cut slope of
-``examples/jointed_slope.py`` they pull 1e-4 to 1e-2 of the largest normal force closed and
-penetrate 1e-4 to 7e-2 of it (as a spring force) open, and were most of its cut steps.
+would otherwise switch every pass until the pass limit cuts the step. While it pulls, such a
+contact counts as settled whatever its lagged normal force. In the 10 x 10 stack of
+``benchmarks/stacks.py`` one pulled 6.4 N closed and penetrated 1.7e-9 m open; on the faces of
+the shaken cut slope of ``examples/jointed_slope.py`` they pull 1e-4 to 1e-2 of the largest
+normal force closed and penetrate 1e-4 to 7e-2 of it (as a spring force) open, and were most of
+its cut steps.
 
 From pass ``LAG_RELAX_AFTER`` on, a lagged normal force that oscillates (its error changed sign
 since the last pass) is under-relaxed, ``N_lag <- (N_lag + N) / 2``: where a sliding contact's
@@ -176,12 +177,12 @@ def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned):
     # a contact that has been opened and closed again in this step's passes and would open
     # once more, pulled by less than CYCLE_TENSION of the largest normal force, stays closed
     # (open it penetrates, closed it pulls: alone it would cycle until the pass limit), and
-    # its lagged normal force no longer holds the iteration
+    # while it pulls its lagged normal force does not hold the iteration
     cycling = ((flips >= 2) & (state != OPEN) & (new_state == OPEN)
                & (el.normal_penalty * gap <= CYCLE_TENSION * largest))
     new_state[cycling] = state[cycling]
     pinned |= cycling
-    return lag_ok | pinned
+    return lag_ok | (pinned & (gap >= 0.0))
 
 
 def _next_lag(t_n, t_n_lag, lag_error, passes):
