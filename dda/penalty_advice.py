@@ -143,13 +143,11 @@ class PenaltyAdvisor:
     ----------
     model : dda.model.Model
     dt : the step size asked for (s)
-    start : the time the steps are counted from (s)
     """
 
-    def __init__(self, model, dt: float, start: float = 0.0):
+    def __init__(self, model, dt: float):
         self.model = model
         self.dt = dt
-        self.start = start
         self.warned: set[str] = set()
 
     def observe(self, state, steps: int, contact_cuts: int) -> None:
@@ -159,7 +157,7 @@ class PenaltyAdvisor:
             self._check_soft(state.contacts)
         if ("stiff" not in self.warned and contact_cuts >= STIFF_CUTS
                 and self.model.free.any()):
-            self._check_stiff(steps, contact_cuts, (state.time - self.start) / max(steps, 1))
+            self._check_stiff(steps, contact_cuts, state.time / max(steps, 1))
 
     def _check_soft(self, c):
         model = self.model
