@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from dda.contact.kinematics import trial_kinematics
 from dda.contact.tangent import consistent_tangent, spring_stiffness
@@ -181,3 +182,80 @@ def test_consistent_tangent_equals_the_hessian_form():
     scale = np.abs(expected).max(axis=(1, 2), keepdims=True)
     assert np.all(np.abs(got - expected) <= 1e-12 * scale)
     assert np.all(got[~closed] == 0.0)
+
+
+def symmetric_system(rng, n_blocks=90, n_contacts=400):
+    """:func:`random_system` with rank-one terms that pair each row with itself (a symmetric
+    matrix, as legacy DDA's springs give) and no rigid blocks."""
+    s = random_system(n_blocks, n_contacts, rng)
+    rows = rng.normal(size=(n_contacts, 3, 12))
+    s["pair_k"] = PairStiffness(rows, [[0, 0], [1, 1], [2, 2]],
+                                np.abs(rng.normal(size=(n_contacts, 3))))
+    return s
+
+
+def upper_of(k):
+    """The upper triangle of sparse ``k`` as CSR with sorted indices (no arithmetic)."""
+    u = sp.triu(k.tocsr(), format="csr")
+    u.sort_indices()
+    return u
+
+
+def test_upper_triangle_is_assembled_in_place_with_the_full_matrixs_bits():
+    """The symmetric system's upper triangle, summed straight into PARDISO's CSR layout, has
+    the full matrix's structure there and every entry's bits (the same sums in the same
+    order), so the solver gets what it got from the full matrix, with half the sums."""
+    s = symmetric_system(np.random.default_rng(5))
+    pattern = SystemPattern(s["free"], s["bj"], s["bk"])
+    full = pattern.matrix(s["block_k"], s["pair_k"])
+    assert abs(full - full.T).max() == 0.0
+    upper = pattern.upper_matrix(s["block_k"], s["pair_k"])
+    ref = upper_of(full)
+    np.testing.assert_array_equal(upper.csr.indptr, ref.indptr)
+    np.testing.assert_array_equal(upper.csr.indices, ref.indices)
+    np.testing.assert_array_equal(upper.csr.data, ref.data)
+    x = np.random.default_rng(1).normal(size=pattern.n)
+    np.testing.assert_allclose(upper @ x, full @ x, rtol=0, atol=1e-12 * np.abs(full @ x).max())
+    assert abs(upper.full() - full).max() == 0.0
+    # negative control: two contacts' places swapped
+    c = np.flatnonzero((pattern._upper_layout[4][0, 1] >= 0)
+                       & (pattern._upper_layout[4][2, 1] >= 0))
+    c = [c[0], c[np.flatnonzero(pattern._upper_layout[4][2, 1, c]
+                                != pattern._upper_layout[4][2, 1, c[0]])[0]]]
+    pattern._upper_layout[4][:, 1, c] = pattern._upper_layout[4][:, 1, c[::-1]]
+    assert not np.array_equal(pattern.upper_matrix(s["block_k"], s["pair_k"]).csr.data,
+                              ref.data)
+
+
+def test_upper_triangle_only_where_it_applies():
+    """Dense systems, rigid blocks and stiffness given as arrays take the full matrix."""
+    rng = np.random.default_rng(2)
+    s = symmetric_system(rng, 12, 40)
+    assert SystemPattern(s["free"], s["bj"], s["bk"]).upper_matrix(
+        s["block_k"], s["pair_k"]) is None
+    s = symmetric_system(rng)
+    pattern = SystemPattern(s["free"], s["bj"], s["bk"])
+    assert pattern.upper_matrix(s["block_k"], s["pair_k"].dense()) is None
+    rigid = random_system(90, 400, rng, rigid=True)
+    assert SystemPattern(rigid["free"], rigid["bj"], rigid["bk"], rigid["rigid"]).upper_matrix(
+        rigid["block_k"], rigid["pair_k"]) is None
+
+
+def test_pardiso_solves_the_upper_triangle_as_the_full_matrix():
+    """Legacy DDA's solves through the upper triangle give the full matrix's solution to the
+    bit (PARDISO reads the same numbers either way)."""
+    from dda.solvers import sparse_factor as sf
+
+    if not sf._pardiso_available():
+        pytest.skip("PARDISO (pypardiso with MKL) is not available here")
+    s = symmetric_system(np.random.default_rng(9))
+    args = [s[k] for k in ("block_k", "block_f", "free", "bj", "bk", "pair_k", "pair_f",
+                           "d_known")]
+    reading = sf.PardisoFactor(symmetric=True)
+    assert reading.reads_upper
+    d_upper = assemble_and_solve(*args, factor=reading)
+    full = sf.PardisoFactor(symmetric=True)
+    full.reads_upper = False
+    d_full = assemble_and_solve(*args, factor=full)
+    np.testing.assert_array_equal(d_upper, d_full)
+    assert reading.fallbacks == full.fallbacks == 0

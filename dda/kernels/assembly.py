@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["matrix_data", "rhs_data"]
+__all__ = ["matrix_data", "upper_data", "rhs_data"]
 
 
 @njit(cache=True)
@@ -77,6 +77,79 @@ def matrix_data(nnz, row_step, block_base, block_step, block_k, free_blocks, pai
                 for j in range(6):
                     data[base + i * row_step + j * step] += k[i, j]
     return data
+
+
+@njit(cache=True)
+def _upper_add(data, k, start, count, rank):
+    """Add the upper-triangle entries of the 6 x 6 block ``k`` to ``data`` (CSR, upper
+    triangle): the block lies in block row P (whose first entry is at ``start``, with
+    ``count`` blocks right of the diagonal), on the diagonal (``rank`` -1) or as the
+    ``rank``-th block right of it. Row 6P + i starts at
+    ``start + 6 i count + 6 i - i (i - 1) / 2`` and holds the diagonal block's columns
+    6P + i..6P + 5, then 6 columns per block right of the diagonal."""
+    for i in range(6):
+        row = start + 6 * i * count + 6 * i - (i * (i - 1)) // 2
+        if rank < 0:
+            for j in range(i, 6):
+                data[row + j - i] += k[i, j]
+        else:
+            off = row + 6 - i + 6 * rank
+            for j in range(6):
+                data[off + j] += k[i, j]
+
+
+@njit(cache=True)
+def upper_data(nnz, block_start, block_count, block_k, free_blocks, pair_start, pair_count,
+               pair_rank, rows, terms, weights):
+    """The upper triangle of the step's symmetric matrix as CSR data (PARDISO's input for a
+    symmetric matrix), summed term by term in the order of :func:`matrix_data`, so every
+    entry has the bits :func:`matrix_data` gives it.
+
+    Parameters
+    ----------
+    nnz : length of the data
+    block_start, block_count : (n_free,) int, each free block's row: where it starts and how
+        many blocks lie right of its diagonal block (:func:`_upper_add`)
+    block_k, free_blocks : as in :func:`matrix_data`
+    pair_start, pair_count, pair_rank : (4, m) int, where each contact's coupling (a, b) goes:
+        the start and count of its block row and its rank right of the diagonal (-1: the
+        diagonal block); ``pair_start`` -1: nowhere (a known block, or below the diagonal)
+    rows, terms, weights : the contacts' rank-one terms (:class:`PairStiffness`)
+    """
+    data = np.zeros(nnz)
+    k = np.empty((6, 6))
+    for s in range(free_blocks.shape[0]):
+        k[:, :] = block_k[free_blocks[s]]
+        _upper_add(data, k, block_start[s], block_count[s], -1)
+    for ab in range(4):
+        a6, b6 = 6 * (ab // 2), 6 * (ab % 2)
+        for c in range(pair_start.shape[1]):
+            start = pair_start[ab, c]
+            if start < 0:
+                continue
+            rank = pair_rank[ab, c]
+            if rank < 0:
+                _diagonal_coupling(k, rows, terms, weights, c, a6)
+            else:
+                coupling_block(k, rows, terms, weights, c, a6, b6)
+            _upper_add(data, k, start, pair_count[ab, c], rank)
+    return data
+
+
+@njit(cache=True)
+def _diagonal_coupling(out, rows, terms, weights, c, a6):
+    """The upper triangle (j >= i) of :func:`coupling_block` ``(c, a6, a6)``, summed in its
+    order (the same values); the rest of ``out`` is left as it was."""
+    for i in range(6):
+        for j in range(i, 6):
+            out[i, j] = 0.0
+    for t in range(terms.shape[0]):
+        w = weights[c, t]
+        u = rows[c, terms[t, 0], a6:a6 + 6]
+        v = rows[c, terms[t, 1], a6:a6 + 6]
+        for i in range(6):
+            for j in range(i, 6):
+                out[i, j] += w * (u[i] * v[j])
 
 
 @njit(cache=True)

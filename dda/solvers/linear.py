@@ -13,10 +13,15 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from dda.kernels.assembly import matrix_data, rhs_data
+from dda.kernels.assembly import matrix_data, rhs_data, upper_data
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.profiling import count_solve, section
-from dda.solvers.sparse_factor import SingularSystemError, SparseFactor, make_factor
+from dda.solvers.sparse_factor import (
+    SingularSystemError,
+    SparseFactor,
+    UpperTriangle,
+    make_factor,
+)
 
 __all__ = ["assemble_and_solve", "assemble_vector", "SystemPattern", "DENSE_LIMIT",
            "SingularSystemError"]
@@ -82,6 +87,8 @@ class SystemPattern:
                     known = (bb[to_rhs], ((6 * sa[to_rhs])[:, None] + np.arange(6)).ravel())
                     self.couplings.append((a, b, both, to_rhs, known))
         br, bc = np.concatenate(brow), np.concatenate(bcol)
+        self._blocks = (br, bc)
+        self._cache = cache
         # entry (i, j) of block entry e goes to data[base[e] + i row_step + j col_step[e]]
         if n <= DENSE_LIMIT:
             self.nnz = n * n
@@ -177,6 +184,79 @@ class SystemPattern:
         return sp.csc_matrix((data[self._take], self._kept_indices, self._kept_indptr),
                              shape=(self.unknowns, self.unknowns))
 
+    def upper_matrix(self, block_k, pair_k) -> UpperTriangle | None:
+        """The matrix of the unknowns as its upper triangle in CSR (what PARDISO reads for a
+        symmetric matrix), assembled straight into that layout: half the sums of
+        :meth:`matrix`, no reordering, and every entry the bits :meth:`matrix` gives it.
+        None where this path does not apply (a dense system, rigid blocks, or contact
+        stiffness given as an array): use :meth:`matrix`."""
+        if (self.n <= DENSE_LIMIT or self.keep is not None
+                or not isinstance(pair_k, PairStiffness)):
+            return None
+        nnz, indptr, indices, block, pair = self._upper_layout
+        data = upper_data(nnz, block[0], block[1],
+                          np.ascontiguousarray(block_k, dtype=np.float64), self.free_blocks,
+                          pair[0], pair[1], pair[2], pair_k.rows, pair_k.terms,
+                          pair_k.weights)
+        return UpperTriangle(sp.csr_matrix((data, indices, indptr), shape=(self.n, self.n)))
+
+    @cached_property
+    def _upper_layout(self):
+        """(nnz, indptr, indices, (start, count) per free block, (start, count, rank) per
+        contact coupling) of the upper-triangle CSR (:func:`dda.kernels.assembly.upper_data`).
+        """
+        br, bc = self._blocks
+        nf = len(self.free_blocks)
+        ub = np.unique((br * nf + bc)[br < bc])
+        if self._cache is None:
+            structure = self._upper_structure(ub, nf)
+        else:
+            structure = self._cache.kept("upper", (np.array([nf]), ub),
+                                         lambda: self._upper_structure(ub, nf))
+        nnz, indptr, indices, start, count = structure
+        # each block entry's place: its row's start and count, and its rank right of the
+        # diagonal (-1 on it); entries below the diagonal go nowhere
+        e_start = np.where(br <= bc, start[br], -1)
+        e_count = count[br]
+        e_rank = np.full(len(br), -1, dtype=np.int64)
+        up = np.flatnonzero(br < bc)
+        e_rank[up] = np.searchsorted(ub, br[up] * nf + bc[up]) - np.searchsorted(
+            ub, br[up] * nf)
+        pair = np.full((3, 4, len(self.side_row[0])), -1, dtype=np.int64)
+        pair[1] = 0
+        first = nf
+        for ab, (_, _, both, _, _) in enumerate(self.couplings):
+            idx = np.flatnonzero(both)
+            sel = slice(first, first + len(idx))
+            pair[0, ab, idx], pair[1, ab, idx], pair[2, ab, idx] = (
+                e_start[sel], e_count[sel], e_rank[sel])
+            first += len(idx)
+        block = (e_start[:nf], e_count[:nf])
+        return nnz, indptr, indices, block, pair
+
+    @staticmethod
+    def _upper_structure(ub, nf):
+        """(nnz, indptr, indices, row start, row count) of the upper-triangle CSR whose
+        blocks right of the diagonal are ``ub`` (row * nf + column, sorted)."""
+        urow, ucol = ub // nf, ub % nf
+        count = np.bincount(urow, minlength=nf)
+        size = 21 + 36 * count  # a row of blocks: the diagonal's upper triangle, then 6 x 6
+        start = np.concatenate([[0], np.cumsum(size)[:-1]])
+        nnz = int(size.sum())
+        i = np.arange(6)
+        row_start = start[:, None] + 6 * i * count[:, None] + 6 * i - i * (i - 1) // 2
+        indptr = np.append(row_start.reshape(-1), nnz).astype(np.int32)
+        indices = np.empty(nnz, dtype=np.int32)
+        for ii in range(6):  # the diagonal blocks: columns 6P + ii..6P + 5 of row 6P + ii
+            for j in range(ii, 6):
+                indices[row_start[:, ii] + j - ii] = 6 * np.arange(nf) + j
+        rank = np.arange(len(ub)) - np.concatenate([[0], np.cumsum(count)])[urow]
+        for ii in range(6):  # the blocks right of it, in column order
+            base = row_start[urow, ii] + 6 - ii + 6 * rank
+            for j in range(6):
+                indices[base + j] = 6 * ucol + j
+        return nnz, indptr, indices, start, count
+
     def reduce(self, vector):
         """The entries of a free blocks' vector (6 per block) that are unknowns."""
         return vector if self.keep is None else vector[self.keep]
@@ -259,7 +339,11 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         d = d_known.copy()
         if pattern.unknowns == 0:
             return d
-        k = pattern.matrix(block_k, pair_k)
+        k = None
+        if factor is not None and factor.reads_upper:
+            k = pattern.upper_matrix(block_k, pair_k)
+        if k is None:
+            k = pattern.matrix(block_k, pair_k)
         rhs = pattern.reduce(pattern.rhs(block_f, pair_k, pair_f, d_known))
     with section("solve"):
         count_solve()
