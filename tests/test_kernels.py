@@ -259,3 +259,19 @@ def test_pardiso_solves_the_upper_triangle_as_the_full_matrix():
     d_full = assemble_and_solve(*args, factor=full)
     np.testing.assert_array_equal(d_upper, d_full)
     assert reading.fallbacks == full.fallbacks == 0
+
+
+def test_pair_vectors_add_as_numpy_add_at():
+    """The compiled sum of contact vectors onto their blocks: numpy.add.at's order, so its
+    bits, repeated blocks included."""
+    from dda.solvers.linear import assemble_vector
+
+    rng = np.random.default_rng(4)
+    s = random_system(30, 200, rng)
+    ref = s["block_f"].copy()
+    np.add.at(ref, s["bj"], s["pair_f"][:, :6])
+    np.add.at(ref, s["bk"], s["pair_f"][:, 6:])
+    ref[~s["free"]] = 0.0
+    out = assemble_vector(s["block_f"], s["free"], s["bj"], s["bk"], s["pair_f"])
+    np.testing.assert_array_equal(out, ref)
+    assert not np.array_equal(out, s["block_f"])

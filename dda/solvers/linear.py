@@ -13,7 +13,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from dda.kernels.assembly import matrix_data, rhs_data, upper_data
+from dda.kernels.assembly import add_pair_vectors, matrix_data, rhs_data, upper_data
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.profiling import count_solve, section
 from dda.solvers.sparse_factor import (
@@ -376,8 +376,8 @@ def assemble_vector(block_f, free, bj, bk, pair_f, rigid=None):
     with section("assembly"):
         out = block_f.copy()
         if len(bj):
-            np.add.at(out, bj, pair_f[:, :6])
-            np.add.at(out, bk, pair_f[:, 6:])
+            add_pair_vectors(out, np.asarray(bj, dtype=np.int64), np.asarray(bk, dtype=np.int64),
+                             np.ascontiguousarray(pair_f, dtype=np.float64))
         out[~free] = 0.0
         if rigid is not None:
             out[rigid, 3:] = 0.0
