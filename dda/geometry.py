@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dda.kernels.geometry import edge_terms, moments_about_centroid
+
 __all__ = [
     "PolygonIntegrals",
     "polygon_integrals",
@@ -87,34 +89,15 @@ def polygon_integrals(vertices: np.ndarray, offsets: np.ndarray,
     conditioned far from the origin, then the moments are moved to the centroid.
     ``nxt`` (:func:`next_vertex_index` of ``offsets``) may be passed when it is at hand.
     """
-    counts = np.diff(offsets)
-    starts = offsets[:-1]
     if nxt is None:
         nxt = next_vertex_index(offsets)
-    ref = np.repeat(vertices[starts], counts, axis=0)
-    p = vertices - ref
-    q = vertices[nxt] - ref
-    x1, y1, x2, y2 = p[:, 0], p[:, 1], q[:, 0], q[:, 1]
-    c = x1 * y2 - x2 * y1
-    per_edge = np.stack(
-        [
-            c,
-            c * (x1 + x2),
-            c * (y1 + y2),
-            c * (x1 * x1 + x1 * x2 + x2 * x2),
-            c * (y1 * y1 + y1 * y2 + y2 * y2),
-            c * (2 * x1 * y1 + x1 * y2 + x2 * y1 + 2 * x2 * y2),
-        ],
-        axis=1,
-    )
-    s = np.add.reduceat(per_edge, starts, axis=0)
-    area = s[:, 0] / 2.0
-    cx = s[:, 1] / 6.0 / area
-    cy = s[:, 2] / 6.0 / area
-    sxx = s[:, 3] / 12.0 - area * cx * cx
-    syy = s[:, 4] / 12.0 - area * cy * cy
-    sxy = s[:, 5] / 24.0 - area * cx * cy
-    centroid = vertices[starts] + np.stack([cx, cy], axis=1)
+    vertices = np.ascontiguousarray(vertices, dtype=np.float64)
+    offsets = np.asarray(offsets, dtype=np.int64)
+    # the terms and the moments compiled (the same arithmetic in the same order: the same
+    # bits as numpy's, six times faster on a few blocks); the sums stay numpy's
+    terms = edge_terms(vertices, offsets, np.asarray(nxt, dtype=np.int64))
+    s = np.add.reduceat(terms, offsets[:-1], axis=0)
+    area, centroid, sxx, syy, sxy = moments_about_centroid(s, vertices[offsets[:-1]])
     return PolygonIntegrals(area=area, centroid=centroid, sxx=sxx, syy=syy, sxy=sxy)
 
 

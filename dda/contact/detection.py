@@ -319,9 +319,10 @@ def narrow_phase(
         return _empty_candidates(len(pairs))
     x = np.ascontiguousarray(x, dtype=np.float64)
     a, b, cross, scale = topo._turn(x)
+    bisector = _outward_bisector(a, b)
     vertex, edge, kblock, on_edge, sunk = _narrow_kernel(
         x, topo.offsets, topo.nxt, topo.prv, np.ascontiguousarray(pairs, dtype=np.int64),
-        boxes, margin, cross < 0.0, cross > 1e-9 * scale, _outward_bisector(a, b),
+        boxes, margin, cross < 0.0, cross > 1e-9 * scale, bisector,
         search_distance, penetration_limit, sunk_depth)
     if len(vertex) == 0:
         return _empty_candidates(len(pairs))
@@ -330,7 +331,7 @@ def narrow_phase(
     order = np.argsort(vertex * len(topo.offsets) + kblock, kind="stable")
     vertex, edge, kblock = vertex[order], edge[order], kblock[order]
     frame = contact_geometry(x, vertex, edge, topo.nxt)
-    score = -np.einsum("ij,ij->i", frame.normal, _outward_bisector(a[vertex], b[vertex]))
+    score = -np.einsum("ij,ij->i", frame.normal, bisector[vertex])
     c = _Candidates(vertex, edge, frame.xi, kblock, score, frame.p1, on_edge[order],
                     sunk[order], np.arange(len(vertex)))
     c = _drop_mirrored(c, x, topo, margin)
