@@ -145,3 +145,20 @@ def test_pardiso_solves_without_iterative_refinement(symmetric):
     assert f._solver.iparm[13] == 0  # no perturbed pivots
     assert f._solver.iparm[6] == 0  # refinement steps done in the last solve
     assert f.fallbacks == 0
+
+
+@pardiso
+def test_an_upper_triangle_falls_back_to_superlu_whole():
+    """A symmetric matrix handed over as its upper triangle (the legacy passes' form) that
+    PARDISO must not answer (indefinite) is solved by SuperLU on the whole matrix."""
+    k, rhs = block_system(40, 3)
+    k = (k - 60.0 * sp.eye(k.shape[0], format="csc")).tocsc()
+    k.sort_indices()
+    upper = sp.triu(k.tocsr(), format="csr")
+    upper.sort_indices()
+    f = sf.make_factor("pardiso", symmetric=True)
+    assert f.reads_upper
+    assert_solves(k, f.solve(sf.UpperTriangle(upper), rhs), rhs)
+    assert f.fallbacks == 1
+    x = np.random.default_rng(0).normal(size=k.shape[0])
+    np.testing.assert_allclose(sf.UpperTriangle(upper) @ x, k @ x, rtol=1e-13, atol=1e-12)
