@@ -105,7 +105,7 @@ CYCLE_TENSION = 1e-2
 # the pass from which a sliding contact's lagged normal force is under-relaxed
 LAG_RELAX_AFTER = 6
 # legacy DDA: a pass whose state changes each move less force than this fraction of the largest
-# normal force on the contact's blocks counts as settled (see the module docstring)
+# normal force on the lighter loaded of the contact's blocks counts as settled (module docstring)
 SETTLE_BAND = 1e-2
 #: None, or a list that gets, per pass, (closing, opening, stick-slip switches, lagging sliding
 #: contacts): what kept the iteration going (benchmarks/stacks.py reads it)
@@ -140,7 +140,7 @@ def open_close(problem: StepProblem, explicit: bool,
     too; without it only the open and closed ones must. ``band`` (default: ``SETTLE_BAND``
     for legacy DDA, ``explicit``, and 0 for the fully implicit method's predictor): state
     changes that move less force than this fraction of the largest normal force on the
-    contact's blocks do not take another pass.
+    lighter loaded of the contact's blocks do not take another pass.
     """
     if settle_friction is None:
         settle_friction = explicit
