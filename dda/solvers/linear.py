@@ -306,7 +306,7 @@ class SystemPattern:
 
 
 def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, pattern=None,
-                       rigid=None, factor: SparseFactor | None = None):
+                       rigid=None, factor: SparseFactor | None = None, near: bool = False):
     """Assemble and solve ``K d = F`` for the free blocks.
 
     Parameters
@@ -328,6 +328,11 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         Who factorizes a sparse system (and may keep its symbolic analysis for the next one
         with the same pattern): :meth:`dda.solvers.StepProblem.factor`. A one-off holder of
         the default backend when None.
+    near : bool
+        The matrix is close to the one ``factor`` factorized last (a later Newton iteration
+        of the same step): a sparse system is solved by :meth:`SparseFactor.solve_near`
+        (GMRES preconditioned by that factorization, a new one only when it does not
+        converge at once).
 
     Returns
     -------
@@ -347,21 +352,23 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         rhs = pattern.reduce(pattern.rhs(block_f, pair_k, pair_f, d_known))
     with section("solve"):
         count_solve()
-        sol = _solve(k, rhs, factor)
+        sol = _solve(k, rhs, factor, near)
     d[pattern.free_blocks] = pattern.expand(sol).reshape(-1, 6)
     return d
 
 
-def _solve(k, rhs, factor: SparseFactor | None):
+def _solve(k, rhs, factor: SparseFactor | None, near: bool = False):
     """Dense LAPACK for an ndarray; a sparse matrix goes to ``factor`` (a one-off holder of
-    the default backend when None, :mod:`dda.solvers.sparse_factor`)."""
+    the default backend when None, :mod:`dda.solvers.sparse_factor`), by
+    :meth:`SparseFactor.solve_near` when ``near``."""
     if isinstance(k, np.ndarray):
         try:
             sol = np.linalg.solve(k, rhs)
         except np.linalg.LinAlgError as exc:
             raise SingularSystemError(str(exc)) from None
     else:
-        sol = (factor or make_factor()).solve(k, rhs)
+        factor = factor or make_factor()
+        sol = factor.solve_near(k, rhs) if near else factor.solve(k, rhs)
     if not np.all(np.isfinite(sol)):
         raise SingularSystemError("the step's system has no finite solution")
     return sol

@@ -32,6 +32,11 @@ ROUND_OFF = 1e-6
 # slip states are settled too (it converges in 1-3 where it converges: 60 x 60 stack of
 # benchmarks/stacks.py; one step in four there ran all 25 and failed before the retry)
 PREDICTOR_ITERATIONS = 6
+# a Newton iteration whose contacts' states differ from those of the tangent factorized last
+# in this many or fewer is solved by GMRES with that factorization (SparseFactor.solve_near):
+# on the 30 x 30 stack of benchmarks/stacks.py GMRES needed 2 iterations with no state
+# changed and about one more per changed contact (29 with 53 changed)
+NEAR_SWITCHES = 4
 
 
 class NewtonRaphson(NonlinearSolver):
@@ -98,8 +103,11 @@ class NewtonRaphson(NonlinearSolver):
         d = d.copy()
         norms: list[float] = []
         zero_known = np.zeros_like(problem.d_known)
+        factor = problem.factor(False)
+        factored = None  # the contact states of the tangent factorized last in this call
         for it in range(max_iter + 1):
             resp = el.response(d)
+            states = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN)
             inertia = np.einsum("bij,bj->bi", problem.block_k, d)
             block_r = inertia - problem.block_f
             r = assemble_vector(block_r, free, el.bj, el.bk, resp.residual, problem.rigid)
@@ -119,12 +127,21 @@ class NewtonRaphson(NonlinearSolver):
                 return StepSolution(None, None, False, 0, it, (
                     f"Newton-Raphson did not converge in {max_iter} iterations "
                     f"(|R| = {norm:.3g}, {norm / scale:.3g} of the forces)"), norms)
+            # a tangent whose contacts are in the states of the one factorized last, but for
+            # a few, differs from it by little (the geometric terms, the slip coupling's
+            # direction, a low-rank change): GMRES with that factorization solves it in a
+            # few iterations
+            near = (factored is not None
+                    and np.count_nonzero(states != factored) <= NEAR_SWITCHES)
+            done = factor.factorizations if factor is not None else 0
             try:
                 step = assemble_and_solve(problem.block_k, -block_r, free, el.bj, el.bk,
                                           resp.stiffness, -resp.residual, zero_known,
-                                          problem.pattern, factor=problem.factor(False))
+                                          problem.pattern, factor=factor, near=near)
             except SingularSystemError as exc:
                 return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
+            if factor is not None and factor.factorizations != done:
+                factored = states
             d = d + step
         state = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN).astype(np.int8)
         trial = el.trial_contacts(state, resp.t_n, resp.t_s, resp.history)
