@@ -31,7 +31,8 @@ FACE_ANGLE = 5.0
 
 @dataclass(frozen=True)
 class Faces:
-    """The face of each contact: contacts with the same ``index`` (an (m,) int array) form one.
+    """The face of each contact: contacts with the same ``index`` (an (m,) array of
+    non-negative ints) form one.
 
     Examples
     --------
@@ -56,8 +57,9 @@ class Faces:
         """Sum of ``values`` over each contact's face, returned per contact."""
         if len(values) == 0:
             return np.zeros(0)
-        _, inverse = np.unique(self.index, return_inverse=True)
-        return np.bincount(inverse, weights=values)[inverse]
+        # the indices need not be consecutive (a subset's are not): faces that are not
+        # there sum to zero and are never read
+        return np.bincount(self.index, weights=values)[self.index]
 
 
 def contact_faces(x: np.ndarray, vertex: np.ndarray, edge: np.ndarray, nxt: np.ndarray,
