@@ -153,3 +153,38 @@ def test_newton_converges_quadratically_with_face_onset():
     assert sol.converged
     np.testing.assert_allclose(sol.d, reference.d, rtol=0, atol=1e-12)
     assert convergence_order(sol.residual_norms, floor=1e-7) >= 1.8
+
+
+def _faces_numpy(x, vertex, edge, nxt, prv, angle=5.0):
+    """The grouping in plain numpy (the compiled kernel's reference)."""
+    def unit(v):
+        return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+    m = len(vertex)
+    tau = unit(x[nxt[edge]] - x[edge])
+    own = np.stack([vertex, prv[vertex]], axis=1)
+    cos = np.einsum("mkj,mj->mk", unit(x[nxt[own]] - x[own]), tau)
+    pick = np.argmin(cos, axis=1)
+    opposite = cos[np.arange(m), pick] <= -np.cos(np.radians(angle))
+    other = own[np.arange(m), pick]
+    n = len(x)
+    key = np.where(opposite, np.minimum(edge, other) * n + np.maximum(edge, other),
+                   n * n + np.arange(m))
+    return np.unique(key, return_inverse=True)[1]
+
+
+@pytest.mark.parametrize("angle", [5.0, 30.0])
+def test_compiled_faces_match_numpy(angle):
+    """The compiled grouping numbers the faces as the numpy version does, on the contacts of
+    a shaken jointed slope (faces, corners, both roles of a block)."""
+    from tests.stability import scenes
+
+    scene, dt = scenes.shaken_cut_slope()[:2]
+    sim = dda.Simulation(scene, dt=dt)
+    sim.run(0.02, progress=False)
+    c, topo = sim.state.contacts, sim.model.topo
+    assert len(c) > 50
+    got = contact_faces(sim.state.x, c.vertex, c.edge, topo.nxt, topo.prv, angle).index
+    want = _faces_numpy(sim.state.x, c.vertex, c.edge, topo.nxt, topo.prv, angle)
+    np.testing.assert_array_equal(got, want)
+    assert 1 < len(np.unique(got)) < len(c)

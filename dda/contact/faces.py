@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dda.kernels.faces import face_index
+
 __all__ = ["FACE_ANGLE", "Faces", "contact_faces"]
 
 #: largest angle (degrees) between a vertex's edge and the edge it touches for a face contact
@@ -74,21 +76,9 @@ def contact_faces(x: np.ndarray, vertex: np.ndarray, edge: np.ndarray, nxt: np.n
     angle : float
         Largest angle in degrees between a face's two edges.
     """
-    m = len(vertex)
-    if m == 0:
+    if len(vertex) == 0:
         return Faces(np.zeros(0, dtype=np.int64))
-    tau = _unit(x[nxt[edge]] - x[edge])
-    own = np.stack([vertex, prv[vertex]], axis=1)  # the vertex's outgoing and incoming edge
-    cos = np.einsum("mkj,mj->mk", _unit(x[nxt[own]] - x[own]), tau)
-    pick = np.argmin(cos, axis=1)
-    opposite = cos[np.arange(m), pick] <= -np.cos(np.radians(angle))
-    other = own[np.arange(m), pick]
-    n_edges = len(x)
-    lo, hi = np.minimum(edge, other), np.maximum(edge, other)
-    # a corner contact gets a key no face can have
-    key = np.where(opposite, lo * n_edges + hi, n_edges * n_edges + np.arange(m))
-    return Faces(np.unique(key, return_inverse=True)[1])
-
-
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return Faces(face_index(np.ascontiguousarray(x, dtype=np.float64),
+                            np.asarray(vertex, dtype=np.int64), np.asarray(edge, dtype=np.int64),
+                            np.asarray(nxt, dtype=np.int64), np.asarray(prv, dtype=np.int64),
+                            float(np.cos(np.radians(angle)))))

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from dda.contact.contacts import OPEN
 from dda.contact.detection import (
@@ -146,16 +147,72 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
 def _gather(keys, values, want, reduce) -> np.ndarray:
     """For each of ``want``, ``reduce`` (np.add or np.maximum) of the values whose key it is
     (0 where none is)."""
-    order = np.argsort(keys, kind="stable")
-    keys, values = keys[order], values[order]
-    head = np.empty(len(keys), dtype=bool)
-    head[:1] = True
-    np.not_equal(keys[1:], keys[:-1], out=head[1:])
-    start = head.nonzero()[0]
-    uniq = keys[start]
-    total = reduce.reduceat(values, start)
-    pos = np.minimum(np.searchsorted(uniq, want), len(uniq) - 1)
-    return np.where(uniq[pos] == want, total[pos], 0.0)
+    return _gather_kernel(np.asarray(keys, dtype=np.int64),
+                          np.ascontiguousarray(values, dtype=np.float64),
+                          np.asarray(want, dtype=np.int64), reduce is np.maximum)
+
+
+@njit(cache=True)
+def _gather_kernel(keys, values, want, use_max):
+    """:func:`_gather` compiled: the values sorted by key (stable) and reduced run by run as
+    ``numpy.add.reduceat`` / ``numpy.maximum.reduceat`` of the sorted runs do (the sum in
+    numpy's order: the first value plus the pairwise sum of the others), to the bit."""
+    order = np.argsort(keys, kind="mergesort")
+    n = keys.shape[0]
+    out = np.zeros(want.shape[0])
+    for w in range(want.shape[0]):
+        key = want[w]
+        lo, hi = 0, n  # the first sorted position whose key is not below ``key``
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if keys[order[mid]] < key:
+                lo = mid + 1
+            else:
+                hi = mid
+        if lo == n or keys[order[lo]] != key:
+            continue
+        end = lo + 1
+        while end < n and keys[order[end]] == key:
+            end += 1
+        if use_max:
+            acc = values[order[lo]]
+            for j in range(lo + 1, end):
+                acc = max(acc, values[order[j]])
+        elif end - lo == 1:
+            acc = values[order[lo]]
+        else:
+            acc = values[order[lo]] + _pairwise_sum(values, order, lo + 1, end - lo - 1)
+        out[w] = acc
+    return out
+
+
+@njit(cache=True)
+def _pairwise_sum(values, order, start, n):
+    """numpy's pairwise summation of ``values[order[start:start + n]]`` (its order of
+    additions: eight running sums in blocks of 128 and fewer, halves above)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += values[order[start + i]]
+        return res
+    if n <= 128:
+        r = np.empty(8)
+        for j in range(8):
+            r[j] = values[order[start + j]]
+        i = 8
+        while i < n - n % 8:
+            for j in range(8):
+                r[j] += values[order[start + i + j]]
+            i += 8
+        res = (r[0] + r[1]) + (r[2] + r[3]) + ((r[4] + r[5]) + (r[6] + r[7]))
+        while i < n:
+            res += values[order[start + i]]
+            i += 1
+        return res
+    half = n // 2
+    half -= half % 8
+    return (_pairwise_sum(values, order, start, half)
+            + _pairwise_sum(values, order, start + half, n - half))
 
 
 def untracked_penetrations(pen: Penetrations, contacts, normal_penalty: np.ndarray,
