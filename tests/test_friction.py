@@ -106,3 +106,52 @@ def test_static_dynamic_transition_checks_its_angles():
         StaticDynamicTransition(phi_static=20.0, phi_dynamic=30.0)
     with pytest.raises(ValueError, match="phi_static"):
         StaticDynamicTransition(phi_static=95.0, phi_dynamic=30.0)
+
+
+@pytest.mark.parametrize("law", [
+    CoulombSingle(phi=30.0), CoulombSingle(phi=25.0, cohesion=2e4),
+    StaticDynamicTransition(35.0, 20.0), StaticDynamicTransition(35.0, 20.0, onset="face")])
+def test_compiled_return_map_is_the_numpy_one(law):
+    """The built-in laws' compiled return map gives the numpy path's trial to the bit:
+    sticking and slipping contacts, open ones (t_n >= 0), zero trials, faces of one to four
+    contacts with sliding and sticking members."""
+    from dda.contact.faces import Faces
+
+    rng = np.random.default_rng(3)
+    m = 400
+    history = law.initial_state(m)
+    history["g_se"] = rng.normal(scale=1e-6, size=m)
+    history["slip"] = rng.uniform(0, 1e-3, size=m)
+    if "sliding" in history:
+        history["sliding"] = (rng.uniform(size=m) < 0.4).astype(float)
+    dgs = rng.normal(scale=2e-6, size=m)
+    dgs[:5] = -history["g_se"][:5]  # zero trial force
+    t_n = -rng.uniform(0, 2e3, size=m)
+    t_n[5:15] = rng.uniform(0, 1e2, size=10)  # open or just touching
+    t_n[15:20] = 0.0
+    p_s = rng.uniform(1e8, 1e10, size=m)
+    length = rng.uniform(0.1, 2.0, size=m)
+    faces = Faces(np.sort(rng.integers(0, m // 2, size=m))) if law.uses_faces else None
+    got = law.return_map(history, dgs, t_n, p_s, length, faces=faces)
+    want = law._numpy_return_map(history, dgs, t_n, p_s, length, faces=faces)
+    assert got.slipping.any() and not got.slipping.all()
+    for a, b in ((got.t_s, want.t_s), (got.slipping, want.slipping),
+                 (got.strength, want.strength)):
+        np.testing.assert_array_equal(a, b)
+    assert got.state.keys() == want.state.keys()
+    for key in got.state:
+        np.testing.assert_array_equal(got.state[key], want.state[key])
+    np.testing.assert_array_equal(law.tangent(got, 1e10, p_s), law.tangent(want, 1e10, p_s))
+
+
+def test_a_subclass_of_a_built_in_law_takes_the_numpy_path():
+    """A law that overrides a part of a built-in one (here the strength) is not given the
+    built-in law's compiled return map."""
+    class Weaker(CoulombSingle):
+        def strength(self, t_n, length, history=None):
+            return 0.5 * super().strength(t_n, length, history)
+
+    law = Weaker(phi=45.0)
+    trial = law.return_map(law.initial_state(1), np.array([1.0]), np.array([-100.0]),
+                           np.array([80.0]), np.ones(1))
+    assert trial.slipping[0] and trial.t_s[0] == pytest.approx(50.0)

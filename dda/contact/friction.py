@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dda._checks import finite_number
+from dda.kernels.friction import coulomb_return_map, transition_return_map
 
 __all__ = ["FrictionLaw", "FrictionTrial", "CoulombLike", "CoulombSingle",
            "StaticDynamicTransition"]
@@ -181,6 +182,21 @@ class CoulombLike(FrictionLaw):
         return {}
 
     def return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces=None):
+        trial = self._compiled_return_map(committed, delta_g_s, t_n, shear_penalty, length,
+                                          faces)
+        if trial is not None:
+            return trial
+        return self._numpy_return_map(committed, delta_g_s, t_n, shear_penalty, length, faces)
+
+    def _compiled_return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces):
+        """The same trial from a compiled kernel (:mod:`dda.kernels.friction`), or None:
+        a built-in law offers one for its own class only, so a subclass that overrides a part
+        of the return map gets the numpy path that calls that part."""
+        return None
+
+    def _numpy_return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces=None):
+        """The return map in numpy, from :meth:`strength`, :meth:`slides`,
+        :meth:`sliding_strength` and :meth:`updated_history` (the reference)."""
         t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
         check = self.strength(t_n, length, committed)
         slipping = self.slides(t_trial, check, t_n, length, committed, faces)
@@ -249,6 +265,15 @@ class CoulombSingle(CoulombLike):
 
     def strength_slope(self, t_n, length, history=None):
         return self.mu
+
+    def _compiled_return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces):
+        if type(self) is not CoulombSingle:
+            return None
+        t_s, slipping, strength, g_se, slip = coulomb_return_map(
+            *_float_arrays(committed["g_se"], committed["slip"], delta_g_s, t_n,
+                           shear_penalty, length), self.mu, self.cohesion)
+        return FrictionTrial(t_s=t_s, slipping=slipping, strength=strength,
+                             state={"g_se": g_se, "slip": slip}, extra={"slope": self.mu})
 
 
 class StaticDynamicTransition(CoulombLike):
@@ -353,3 +378,25 @@ class StaticDynamicTransition(CoulombLike):
 
     def updated_history(self, history, slipping):
         return {"sliding": slipping.astype(float)}
+
+    def _compiled_return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces):
+        if type(self) is not StaticDynamicTransition:
+            return None
+        face = _NO_FACES if faces is None else np.asarray(faces.index, dtype=np.int64)
+        g_se, slip, sliding, dgs, tn, ps = _float_arrays(
+            committed["g_se"], committed["slip"], committed["sliding"], delta_g_s, t_n,
+            shear_penalty)
+        t_s, slipping, strength, g_out, slip_out = transition_return_map(
+            g_se, slip, sliding, dgs, tn, ps, self.mu_static, self.mu_dynamic, face)
+        return FrictionTrial(
+            t_s=t_s, slipping=slipping, strength=strength,
+            state={"g_se": g_out, "slip": slip_out, "sliding": slipping.astype(float)},
+            extra={"slope": self.mu_dynamic})
+
+
+_NO_FACES = np.zeros(0, dtype=np.int64)
+
+
+def _float_arrays(*arrays):
+    """The arrays as the kernels take them (float64; a view when they already are)."""
+    return tuple(np.asarray(a, dtype=np.float64) for a in arrays)

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dda.geometry import t_matrix
+from dda.kernels.kinematics import first_variations, frames, tributary_lengths
+from dda.kernels.kinematics import pair_maps as _pair_maps
 
 __all__ = [
     "ContactGeometry",
@@ -59,16 +60,10 @@ def contact_geometry(x: np.ndarray, vertex: np.ndarray, edge: np.ndarray, nxt: n
 
 
 def contact_frame(p1: np.ndarray, p2: np.ndarray, p3: np.ndarray) -> ContactGeometry:
-    """Contact frame of points P1 (vertex) and P2 -> P3 (edge), each (m, 2)."""
-    d = p3 - p2
-    length = np.hypot(d[:, 0], d[:, 1])
-    tau = d / length[:, None]
-    normal = np.empty_like(tau)
-    np.negative(tau[:, 1], out=normal[:, 0])
-    normal[:, 1] = tau[:, 0]
-    rel = p1 - p2
-    gap = np.einsum("ij,ij->i", rel, normal)
-    xi = np.einsum("ij,ij->i", rel, tau) / length
+    """Contact frame of points P1 (vertex) and P2 -> P3 (edge), each (m, 2) (compiled:
+    :func:`dda.kernels.kinematics.frames`)."""
+    length, tau, normal, gap, xi = frames(
+        *(np.ascontiguousarray(a, dtype=np.float64) for a in (p1, p2, p3)))
     return ContactGeometry(p1, p2, p3, length, tau, normal, gap, xi)
 
 
@@ -96,14 +91,12 @@ def pair_maps(x_ref, vertex, edge, nxt, cj, ck):
     """Rows mapping [d_j; d_k] (12) to the motion of P1, P2 and P3: three (m, 2, 12) arrays.
 
     Each is :func:`dda.geometry.t_matrix` of its point, in the columns of its block (all
-    three built at once; they are the three C-contiguous parts of one (3, m, 2, 12) array).
+    three built at once, compiled: :func:`dda.kernels.kinematics.pair_maps`; they are the
+    three C-contiguous parts of one (3, m, 2, 12) array).
     """
-    m = len(vertex)
-    t = t_matrix(np.concatenate([x_ref[vertex], x_ref[nxt[edge]], x_ref[edge]]),
-                 np.concatenate([cj, ck, ck]))
-    a = np.zeros((3, m, 2, 12))
-    a[0, :, :, :6] = t[:m]
-    a[1:, :, :, 6:] = t[m:].reshape(2, m, 2, 6)
+    a = _pair_maps(np.ascontiguousarray(x_ref, dtype=np.float64), _ints(vertex), _ints(edge),
+                   _ints(nxt), np.ascontiguousarray(cj, dtype=np.float64),
+                   np.ascontiguousarray(ck, dtype=np.float64))
     return a[0], a[1], a[2]
 
 
@@ -130,6 +123,8 @@ def trial_kinematics(p1, p2, p3, xi0, maps, second=True) -> TrialKinematics:
     maps : the three (m, 2, 12) arrays of :func:`pair_maps` (start-of-step positions)
     second : also compute the second variations
     """
+    if not second:
+        return _first_only(p1, p2, p3, xi0, maps)
     geom = contact_frame(p1, p2, p3)
     a1, a2, a3 = maps
     n, tau, length, gap, xi = geom.normal, geom.tau, geom.length, geom.gap, geom.xi
@@ -160,20 +155,29 @@ def trial_kinematics(p1, p2, p3, xi0, maps, second=True) -> TrialKinematics:
     return TrialKinematics(gap, shear, xi, length, n, tau, e_row, i_row, gn_h, gs_h)
 
 
+def _first_only(p1, p2, p3, xi0, maps) -> TrialKinematics:
+    """:func:`trial_kinematics` without the second variations, compiled
+    (:func:`dda.kernels.kinematics.first_variations`, the same bits)."""
+    f64 = np.float64
+    length, tau, normal, gap, xi, shear, e_row, i_row = first_variations(
+        *(np.ascontiguousarray(a, dtype=f64) for a in (p1, p2, p3, xi0, *maps)))
+    return TrialKinematics(gap, shear, xi, length, normal, tau, e_row, i_row, None, None)
+
+
 def tributary_length(
     x: np.ndarray, vertex: np.ndarray, geom: ContactGeometry, prv: np.ndarray, nxt: np.ndarray
 ) -> np.ndarray:
     """Contact length l_c a vertex contact stands for (turns a stress into a force per metre).
 
     Half the shorter of the contacted edge and the vertex's own edge that runs most nearly
-    along it: two vertex contacts of a face lying on an edge then share the face's length.
+    along it: two vertex contacts of a face lying on an edge then share the face's length
+    (compiled: :func:`dda.kernels.kinematics.tributary_lengths`).
     """
-    arms = []
-    for nb in (prv[vertex], nxt[vertex]):
-        a = x[nb] - geom.p1
-        la = np.hypot(a[:, 0], a[:, 1])
-        cos = np.abs(np.einsum("ij,ij->i", a, geom.tau)) / la
-        arms.append((la, cos))
-    (la, ca), (lb, cb) = arms
-    parallel = np.where(ca >= cb, la, lb)
-    return 0.5 * np.minimum(geom.length, parallel)
+    return tributary_lengths(np.ascontiguousarray(x, dtype=np.float64), _ints(vertex),
+                             _ints(prv), _ints(nxt),
+                             *(np.ascontiguousarray(a, dtype=np.float64)
+                               for a in (geom.p1, geom.tau, geom.length)))
+
+
+def _ints(a):
+    return np.asarray(a, dtype=np.int64)
