@@ -115,3 +115,30 @@ def test_find_overlaps():
 def test_bounding_boxes():
     x, off = stack(box(0, 0, 1, 2), box(3, 1, 1, 1))
     np.testing.assert_allclose(bounding_boxes(x, off), [[0, 0, 1, 2], [3, 1, 4, 2]])
+
+
+def test_compiled_vertex_turns_are_the_numpy_ones():
+    """Cross products, their scale, dot products and outward bisectors of every vertex come
+    from one compiled pass: numpy's numbers to the bit, straight vertices included."""
+    from dda.contact.detection import VertexTopology, _outward_bisector
+
+    rng = np.random.default_rng(0)
+    offsets, points = [0], []
+    for b in range(200):
+        k = int(rng.integers(3, 9))
+        angle = np.sort(rng.uniform(0, 2 * np.pi, k))
+        radius = rng.uniform(0.5, 2.0, k)
+        p = np.stack([radius * np.cos(angle), radius * np.sin(angle)], 1)
+        p += rng.normal(scale=10.0, size=2)
+        if b % 5 == 0:  # a straight vertex: the midpoint of an edge
+            p = np.insert(p, 1, 0.5 * (p[0] + p[1]), axis=0)
+        points.append(p)
+        offsets.append(offsets[-1] + len(p))
+    x = np.concatenate(points)
+    topo = VertexTopology.from_offsets(np.array(offsets))
+    a, b, cross, scale = topo._turn(x)
+    got = topo.turns(x)
+    for want, have in zip((cross, scale, np.einsum("ij,ij->i", a, b), _outward_bisector(a, b)),
+                          got, strict=True):
+        np.testing.assert_array_equal(have, want)
+    assert topo.straight(x).sum() == 40

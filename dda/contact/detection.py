@@ -47,6 +47,7 @@ from numba import njit
 
 from dda.contact.kinematics import ContactGeometry, contact_geometry
 from dda.geometry import next_vertex_index, polygon_integrals
+from dda.kernels.geometry import vertex_turns
 
 __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts",
            "inside_depth"]
@@ -125,19 +126,30 @@ class VertexTopology:
     def straight(self, x: np.ndarray, index=None) -> np.ndarray:
         """Whether each vertex (or each of ``index``) lies on the straight line of its two
         edges (to round-off): a point of a side, not a corner."""
-        a, b, cross, scale = self._turn(x, index)
-        return (np.abs(cross) <= 1e-9 * scale) & (np.einsum("ij,ij->i", a, b) < 0.0)
+        if index is None:
+            cross, scale, dot, _ = self.turns(x)
+        else:
+            a, b, cross, scale = self._turn(x, index)
+            dot = np.einsum("ij,ij->i", a, b)
+        return (np.abs(cross) <= 1e-9 * scale) & (dot < 0.0)
 
     def reflex(self, x: np.ndarray) -> np.ndarray:
         """Whether each vertex is reflex (its interior angle above 180 degrees by more than
         round-off; a straight vertex between collinear edges is not)."""
-        _, _, cross, scale = self._turn(x)
+        cross, scale, _, _ = self.turns(x)
         return cross > 1e-9 * scale
 
     def convex_and_bisector(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Convexity of every vertex and its outward unit bisector."""
-        a, b, cross, _ = self._turn(x)
-        return cross < 0.0, _outward_bisector(a, b)
+        cross, _, _, bisector = self.turns(x)
+        return cross < 0.0, bisector
+
+    def turns(self, x: np.ndarray):
+        """Per vertex: the cross product ``a x b`` of its arms (a to prev, b to next), its
+        round-off scale ``|a| |b|``, their dot product and the outward unit bisector, in one
+        compiled pass (:func:`dda.kernels.geometry.vertex_turns`; the numbers of
+        :meth:`_turn` and :func:`_outward_bisector` to the bit)."""
+        return vertex_turns(np.ascontiguousarray(x, dtype=np.float64), self.prv, self.nxt)
 
 
 def _norm(v):
@@ -318,8 +330,7 @@ def narrow_phase(
     if len(pairs) == 0:
         return _empty_candidates(len(pairs))
     x = np.ascontiguousarray(x, dtype=np.float64)
-    a, b, cross, scale = topo._turn(x)
-    bisector = _outward_bisector(a, b)
+    cross, scale, _, bisector = topo.turns(x)
     vertex, edge, kblock, on_edge, sunk = _narrow_kernel(
         x, topo.offsets, topo.nxt, topo.prv, np.ascontiguousarray(pairs, dtype=np.int64),
         boxes, margin, cross < 0.0, cross > 1e-9 * scale, bisector,

@@ -9,10 +9,12 @@ the kernels need not copy), so the results have the same bits.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-__all__ = ["edge_terms", "moments_about_centroid"]
+__all__ = ["edge_terms", "moments_about_centroid", "vertex_turns"]
 
 
 @njit(cache=True)
@@ -59,3 +61,43 @@ def moments_about_centroid(s, first):
         centroid[b, 0] = first[b, 0] + cx
         centroid[b, 1] = first[b, 1] + cy
     return area, centroid, sxx, syy, sxy
+
+
+@njit(cache=True)
+def vertex_turns(x, prv, nxt):
+    """Per vertex, with arms ``a = prev - v`` and ``b = next - v``: the cross product
+    ``a x b``, its round-off scale ``|a| |b|`` (hypot), the dot product ``a . b`` (summed from
+    zero, as ``numpy.einsum``) and the outward unit bisector (for a straight vertex, whose
+    bisector vanishes, the outward normal of prev -> next), as
+    :func:`dda.contact.detection._outward_bisector` computes them."""
+    n = x.shape[0]
+    cross = np.empty(n)
+    scale = np.empty(n)
+    dot = np.empty(n)
+    bisector = np.empty((n, 2))
+    for v in range(n):
+        a0 = x[prv[v], 0] - x[v, 0]
+        a1 = x[prv[v], 1] - x[v, 1]
+        b0 = x[nxt[v], 0] - x[v, 0]
+        b1 = x[nxt[v], 1] - x[v, 1]
+        cross[v] = a0 * b1 - a1 * b0
+        scale[v] = math.hypot(a0, a1) * math.hypot(b0, b1)
+        d = 0.0
+        d += a0 * b0
+        d += a1 * b1
+        dot[v] = d
+        la = np.sqrt(a0 * a0 + a1 * a1)
+        lb = np.sqrt(b0 * b0 + b1 * b1)
+        ub0 = b0 / lb
+        ub1 = b1 / lb
+        i0 = a0 / la + ub0
+        i1 = a1 / la + ub1
+        norm = np.sqrt(i0 * i0 + i1 * i1)
+        if norm < 1e-12:  # straight: the left normal of prev -> next, inward
+            i0, i1 = -ub1, ub0
+        else:
+            norm = max(norm, 1e-300)
+            i0, i1 = i0 / norm, i1 / norm
+        bisector[v, 0] = -i0
+        bisector[v, 1] = -i1
+    return cross, scale, dot, bisector
