@@ -68,3 +68,27 @@ def test_newton_rejects_bad_settings():
         dda.solvers.NewtonRaphson(tol=-1.0)
     with pytest.raises(ValueError, match="max_iter"):
         dda.solvers.NewtonRaphson(max_iter=0)
+
+
+def test_newton_halves_a_step_that_cycles_across_a_kink():
+    """On the 30 x 30 stack of benchmarks/stacks.py the step after t = 0.075 s had two
+    sliding contacts whose trial force changed sign at every full Newton step: |R| stayed at
+    30 N through the predictor's iterations and cycled between 450 and 560 N (sliding, open,
+    sliding) through all 25 of the next, and the step was cut. Halving a step that brings
+    back the contact pattern of two steps before converges it."""
+    import dda.solvers.newton as newton
+    from dda.solvers import NewtonRaphson
+    from tests.conftest import stack_scene
+
+    sim = dda.Simulation(stack_scene(30), dt=1e-3, solver=NewtonRaphson(), max_open_close=30)
+    sim.run(0.075, progress=False)
+    problem = capture_step_problem(sim, 1e-3)
+    sol = NewtonRaphson().solve_step(problem)
+    assert sol.converged, sol.reason
+    old = newton.LINE_SEARCH_HALVINGS
+    newton.LINE_SEARCH_HALVINGS = 0
+    try:
+        without = NewtonRaphson().solve_step(problem)
+    finally:
+        newton.LINE_SEARCH_HALVINGS = old
+    assert not without.converged and "did not converge in 25" in without.reason

@@ -12,6 +12,15 @@ unsymmetric slip coupling included), until the out-of-balance force is below ``t
 size of the forces in play (or has reached the round-off floor of a stiff penalty system:
 below 1e-6 of the forces and no longer decreasing). Converged: quadratic. Not converged in
 ``max_iter``: the step is reported failed and the simulation retries it with a smaller dt.
+
+The return map has kinks (a contact that opens, a sliding contact whose trial force changes
+sign), and full Newton steps can jump back and forth across one for ever. A step that brings
+the contacts back to the states (and sliding directions) of two steps before without halving
+the residual is halved, up to ``LINE_SEARCH_HALVINGS`` times, before the next step is taken.
+
+Later iterations whose contacts keep their states (but for ``NEAR_SWITCHES``) solve by GMRES
+preconditioned with the last factorization of the tangent
+(:meth:`dda.solvers.sparse_factor.SparseFactor.solve_near`) instead of factorizing again.
 """
 
 from __future__ import annotations
@@ -32,6 +41,12 @@ ROUND_OFF = 1e-6
 # slip states are settled too (it converges in 1-3 where it converges: 60 x 60 stack of
 # benchmarks/stacks.py; one step in four there ran all 25 and failed before the retry)
 PREDICTOR_ITERATIONS = 6
+# a Newton step that cycles (see iterate) is halved up to this many times (each halving is one
+# iteration of the budget): on the 30 x 30 stack of benchmarks/stacks.py two sliding contacts
+# whose trial force changed sign at every full step held |R| at 30 N for the predictor's
+# iterations and at 450 / 560 N (sliding, open, sliding, ...) for all 25 of the next ones: a
+# cut step
+LINE_SEARCH_HALVINGS = 4
 # a Newton iteration whose contacts' states differ from those of the tangent factorized last
 # in this many or fewer is solved by GMRES with that factorization (SparseFactor.solve_near):
 # on the 30 x 30 stack of benchmarks/stacks.py GMRES needed 2 iterations with no state
@@ -105,6 +120,8 @@ class NewtonRaphson(NonlinearSolver):
         zero_known = np.zeros_like(problem.d_known)
         factor = problem.factor(False)
         factored = None  # the contact states of the tangent factorized last in this call
+        base, step, halvings = None, None, 0  # the last Newton step, from base
+        patterns: list[np.ndarray] = []  # the contacts' pattern at each accepted iterate
         for it in range(max_iter + 1):
             resp = el.response(d)
             states = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN)
@@ -117,9 +134,23 @@ class NewtonRaphson(NonlinearSolver):
             scale = max(float(np.linalg.norm(problem.block_f[free])),
                         float(np.linalg.norm(inertia[free])),
                         float(np.linalg.norm(contact[free])), 1e-300)
-            norms.append(norm)
-            if norm <= self.tol * scale or _at_round_off(norms, scale):
+            if norm <= self.tol * scale or _at_round_off(norms + [norm], scale):
+                norms.append(norm)
                 break
+            # the contacts' states, and the direction of the sliding ones: Newton's full steps
+            # can jump back and forth across the kinks of the return map (where a contact
+            # opens, or a sliding one's trial force changes sign) for ever. A step that
+            # brings back the pattern of two steps before without halving |R| since then is
+            # halved (up to LINE_SEARCH_HALVINGS times) before the next one is taken
+            pattern = np.where(states == SLIP, 2 * np.sign(resp.t_s), states).astype(np.int8)
+            if (base is not None and halvings < LINE_SEARCH_HALVINGS and it < max_iter
+                    and len(patterns) >= 2 and np.array_equal(pattern, patterns[-2])
+                    and norm > 0.5 * norms[-2]):
+                halvings += 1
+                d = base + 0.5 ** halvings * step
+                continue
+            norms.append(norm)
+            patterns.append(pattern)
             if not np.isfinite(norm):
                 return StepSolution(None, None, False, 0, it,
                                     "Newton-Raphson diverged (non-finite residual)", norms)
@@ -142,6 +173,7 @@ class NewtonRaphson(NonlinearSolver):
                 return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
             if factor is not None and factor.factorizations != done:
                 factored = states
+            base, halvings = d, 0
             d = d + step
         state = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN).astype(np.int8)
         trial = el.trial_contacts(state, resp.t_n, resp.t_s, resp.history)
