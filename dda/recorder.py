@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 
 from dda import geometry
-from dda.contact.contacts import OPEN, pair_key
-from dda.contact.detection import _groups
+from dda.contact.contacts import OPEN
 from dda.contact.kinematics import contact_geometry
+from dda.kernels.forces import pair_force_sums
 from dda.result import Frame
 
 __all__ = ["Recorder", "frame", "pair_forces"]
@@ -51,26 +51,13 @@ def pair_forces(model, state):
     closed = (c.state != OPEN).nonzero()[0]
     if len(closed) == 0:
         return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2))
-    # the contacted edges' frames (as contact_geometry has them: P2 = next(e), P3 = e)
-    edge = c.edge[closed]
-    d = state.x[edge] - state.x[model.topo.nxt[edge]]
-    tau = d / np.hypot(d[:, 0], d[:, 1])[:, None]
-    g_normal = np.empty_like(tau)
-    np.negative(tau[:, 1], out=g_normal[:, 0])
-    g_normal[:, 1] = tau[:, 0]
-    bj, bk = c.bj[closed], c.bk[closed]
-    t_n, t_s = c.t_n[closed], c.t_s[closed]
-    on_j = -(t_n[:, None] * g_normal + t_s[:, None] * tau)
-    j_high = bj > bk
-    sign = np.where(j_high, 1.0, -1.0)[:, None]
-    force = sign * on_j
-    normal = sign * g_normal * np.abs(t_n)[:, None]
-    keys, _, inv = _groups(pair_key(bj, bk, model.n_blocks))
-    f = np.zeros((len(keys), 2))
-    n = np.zeros((len(keys), 2))
-    np.add.at(f, inv, force)
-    np.add.at(n, inv, normal)
-    return keys, f, n
+    # the contacted edges' frames as contact_geometry has them (P2 = next(e), P3 = e),
+    # summed per pair in compiled code (dda.kernels.forces)
+    return pair_force_sums(np.ascontiguousarray(state.x, dtype=np.float64), model.topo.nxt,
+                           c.edge[closed], c.bj[closed], c.bk[closed],
+                           np.ascontiguousarray(c.t_n[closed], dtype=np.float64),
+                           np.ascontiguousarray(c.t_s[closed], dtype=np.float64),
+                           model.n_blocks)
 
 
 class Recorder:

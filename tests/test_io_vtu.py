@@ -82,3 +82,33 @@ def test_pyvista_reads_the_series(run_with_output):
     total = grid.cell_data["normal_force"][contact_cells].sum()
     joint = sum(result.joint_force(a, b)[-1, 0] for a, b in ((base, top), (base, tri)))
     assert total == pytest.approx(joint, rel=1e-3)
+
+
+def test_compiled_pair_forces_are_the_numpy_ones():
+    """The recorder's per-pair force sums come from a compiled kernel: the numpy version's
+    keys and numbers to the bit, on the many contacts of a shaken jointed slope."""
+    from dda.contact.contacts import OPEN, pair_key
+    from dda.contact.detection import _groups
+    from dda.recorder import pair_forces
+    from tests.stability import scenes
+
+    sim = dda.Simulation(scenes.shaken_cut_slope()[0], dt=2e-3)
+    sim.run(0.02, progress=False)
+    model, state = sim.model, sim.state
+    c = state.contacts
+    closed = (c.state != OPEN).nonzero()[0]
+    edge = c.edge[closed]
+    d = state.x[edge] - state.x[model.topo.nxt[edge]]
+    tau = d / np.hypot(d[:, 0], d[:, 1])[:, None]
+    g_normal = np.stack([-tau[:, 1], tau[:, 0]], axis=1)
+    bj, bk = c.bj[closed], c.bk[closed]
+    t_n, t_s = c.t_n[closed], c.t_s[closed]
+    sign = np.where(bj > bk, 1.0, -1.0)[:, None]
+    keys, _, inv = _groups(pair_key(bj, bk, model.n_blocks))
+    f, n = np.zeros((len(keys), 2)), np.zeros((len(keys), 2))
+    np.add.at(f, inv, sign * -(t_n[:, None] * g_normal + t_s[:, None] * tau))
+    np.add.at(n, inv, sign * g_normal * np.abs(t_n)[:, None])
+    got = pair_forces(model, state)
+    assert len(keys) > 20 and len(closed) > len(keys)
+    for have, want in zip(got, (keys, f, n), strict=True):
+        np.testing.assert_array_equal(have, want)
