@@ -275,3 +275,25 @@ def test_pair_vectors_add_as_numpy_add_at():
     out = assemble_vector(s["block_f"], s["free"], s["bj"], s["bk"], s["pair_f"])
     np.testing.assert_array_equal(out, ref)
     assert not np.array_equal(out, s["block_f"])
+
+
+def test_compiled_legacy_springs_are_the_numpy_ones():
+    """Legacy DDA's springs of a pass come from a compiled kernel: numpy's weights and forces
+    to the bit, for open, sticking and sliding contacts."""
+    from dda.kernels.pair_stiffness import legacy_springs
+
+    rng = np.random.default_rng(0)
+    m = 300
+    state = rng.integers(0, 3, m).astype(np.int8)
+    gap0, p_n, p_s, t_stick, t_slip = (rng.normal(size=m) for _ in range(5))
+    e, i = rng.normal(size=(m, 12)), rng.normal(size=(m, 12))
+    stick, slip = state == 1, state == 2
+    kn = np.where(state != 0, p_n, 0.0)
+    ks = np.where(stick, p_s, 0.0)
+    fs = np.where(stick, t_stick, 0.0) + np.where(slip, t_slip, 0.0)
+    weights, force = legacy_springs(state, gap0, p_n, p_s, t_stick, t_slip, e, i)
+    np.testing.assert_array_equal(weights, np.stack([kn, ks], axis=1))
+    np.testing.assert_array_equal(force, -((kn * gap0)[:, None] * e + fs[:, None] * i))
+    np.testing.assert_array_equal(spring_stiffness(e, i, kn, ks).dense(),
+                                  PairStiffness(np.stack([e, i], axis=1), [[0, 0], [1, 1]],
+                                                weights).dense())

@@ -9,6 +9,7 @@ an (m, 12, 12) array on request), the forces as an (m, 12) array.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -22,8 +23,8 @@ from dda.contact.kinematics import (
     trial_kinematics,
     tributary_length,
 )
-from dda.contact.tangent import consistent_tangent, spring_stiffness
-from dda.kernels.pair_stiffness import PairStiffness
+from dda.contact.tangent import SPRING_TERMS, consistent_tangent
+from dda.kernels.pair_stiffness import PairStiffness, legacy_springs
 from dda.profiling import section
 
 __all__ = ["ContactElement", "LawGroups"]
@@ -266,16 +267,17 @@ class ContactElement:
             return self._legacy_contributions(state, t_stick, t_s_slip)
 
     def _legacy_contributions(self, state, t_stick, t_s_slip):
-        closed = state != 0
-        stick = state == STICK
-        slip = state == SLIP
-        kn = np.where(closed, self.normal_penalty, 0.0)
-        ks = np.where(stick, self.shear_penalty, 0.0)
-        e, i = self.e_row, self.i_row
-        fn = kn * self.gap0
-        fs = np.where(stick, t_stick, 0.0) + np.where(slip, t_s_slip, 0.0)
-        f = -(fn[:, None] * e + fs[:, None] * i)
-        return spring_stiffness(e, i, kn, ks), f
+        f64 = np.float64
+        weights, f = legacy_springs(
+            np.asarray(state, dtype=np.int8), *(np.ascontiguousarray(a, dtype=f64) for a in (
+                self.gap0, self.normal_penalty, self.shear_penalty, t_stick, t_s_slip,
+                self.e_row, self.i_row)))
+        return PairStiffness.checked_by_caller(self._spring_rows, SPRING_TERMS, weights), f
+
+    @cached_property
+    def _spring_rows(self) -> np.ndarray:
+        """(m, 2, 12) the rows E and I of legacy DDA's springs (fixed within the step)."""
+        return np.ascontiguousarray(np.stack([self.e_row, self.i_row], axis=1), dtype=np.float64)
 
     def response(self, d: np.ndarray) -> ContactResponse:
         """Contact forces and consistent tangent at the trial increments d (METHOD.md s. 3-4).

@@ -12,9 +12,10 @@ import numpy as np
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.kernels.tangent import tangent_rows
 
-__all__ = ["spring_stiffness", "consistent_tangent"]
+__all__ = ["spring_stiffness", "consistent_tangent", "SPRING_TERMS"]
 
-_SPRING_TERMS = np.array([[0, 0], [1, 1]])
+#: the terms (E, E) and (I, I) of legacy DDA's springs on the rows [E, I]
+SPRING_TERMS = np.array([[0, 0], [1, 1]], dtype=np.int64)
 # rows E, I, S, H, B: p_n E^T E + I^T S + B^T H + H^T B
 _TANGENT_TERMS = np.array([[0, 0], [1, 2], [4, 3], [3, 4]])
 
@@ -27,7 +28,7 @@ def spring_stiffness(e_row, i_row, kn, ks) -> PairStiffness:
     e_row, i_row : (m, 12) the rows E and I of the step's start
     kn, ks : (m,) the springs' stiffness (zero where a spring is off)
     """
-    return PairStiffness(np.stack([e_row, i_row], axis=1), _SPRING_TERMS,
+    return PairStiffness(np.stack([e_row, i_row], axis=1), SPRING_TERMS,
                          np.stack([kn, ks], axis=1))
 
 

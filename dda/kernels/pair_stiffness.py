@@ -14,8 +14,9 @@ assembly (:mod:`dda.kernels.assembly`) evaluates the entries where they are summ
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
-__all__ = ["PairStiffness"]
+__all__ = ["PairStiffness", "legacy_springs"]
 
 
 class PairStiffness:
@@ -41,6 +42,15 @@ class PairStiffness:
         if len(self.terms) and not (0 <= self.terms.min() and self.terms.max() < p):
             raise ValueError(f"PairStiffness: terms name rows outside 0..{p - 1}")
 
+    @classmethod
+    def checked_by_caller(cls, rows, terms, weights) -> PairStiffness:
+        """The same, from arrays the caller guarantees fit (C-contiguous float64 rows and
+        weights, int64 terms within the rows): no copies, no checks (the step's own
+        springs, built every OPEN-CLOSE pass)."""
+        k = cls.__new__(cls)
+        k.rows, k.terms, k.weights = rows, terms, weights
+        return k
+
     def __len__(self):
         return len(self.rows)
 
@@ -61,3 +71,24 @@ class PairStiffness:
             raise ValueError("PairStiffness: the (m, 12, 12) array is built on request")
         k = self.dense()
         return k if dtype is None else k.astype(dtype)
+
+
+@njit(cache=True)
+def legacy_springs(state, gap0, normal_penalty, shear_penalty, t_stick, t_slip, e_row, i_row):
+    """Legacy DDA's springs of every contact (state 0 open, 1 stick, 2 slip): the weights
+    ``(k_n, k_s)`` of ``k_n E^T E + k_s I^T I`` and the force
+    ``-(k_n g_n0 E + t_s I)`` with ``t_s`` the stick spring's force or the friction load
+    (:meth:`dda.contact.ContactElement.legacy_contributions`, the same arithmetic)."""
+    m = state.shape[0]
+    weights = np.empty((m, 2))
+    force = np.empty((m, 12))
+    for c in range(m):
+        kn = normal_penalty[c] if state[c] != 0 else 0.0
+        ks = shear_penalty[c] if state[c] == 1 else 0.0
+        weights[c, 0] = kn
+        weights[c, 1] = ks
+        fn = kn * gap0[c]
+        fs = (t_stick[c] if state[c] == 1 else 0.0) + (t_slip[c] if state[c] == 2 else 0.0)
+        for j in range(12):
+            force[c, j] = -(fn * e_row[c, j] + fs * i_row[c, j])
+    return weights, force
