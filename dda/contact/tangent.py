@@ -17,7 +17,7 @@ __all__ = ["spring_stiffness", "consistent_tangent", "SPRING_TERMS"]
 #: the terms (E, E) and (I, I) of legacy DDA's springs on the rows [E, I]
 SPRING_TERMS = np.array([[0, 0], [1, 1]], dtype=np.int64)
 # rows E, I, S, H, B: p_n E^T E + I^T S + B^T H + H^T B
-_TANGENT_TERMS = np.array([[0, 0], [1, 2], [4, 3], [3, 4]])
+_TANGENT_TERMS = np.array([[0, 0], [1, 2], [4, 3], [3, 4]], dtype=np.int64)
 
 
 def spring_stiffness(e_row, i_row, kn, ks) -> PairStiffness:
@@ -56,4 +56,5 @@ def consistent_tangent(kin, maps, xi0, kn, kss, ksn, t_n, t_s, closed) -> PairSt
     rows = tangent_rows(*maps, kin.normal, kin.tau, kin.xi, xi0, kin.gap, kin.shear,
                         kin.length, kin.e_row, kin.i_row, kss, ksn, t_n, t_s, closed)
     one = np.ones(len(kn))
-    return PairStiffness(rows, _TANGENT_TERMS, np.stack([kn, one, one, one], axis=1))
+    weights = np.stack([kn, one, one, one], axis=1).astype(np.float64, copy=False)
+    return PairStiffness.checked_by_caller(rows, _TANGENT_TERMS, weights)
