@@ -15,8 +15,11 @@ _GL_W = 0.5 * _GL_W
 
 
 def _as_xy(value, what: str) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
-    if a.shape != (2,):
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        a = None
+    if a is None or a.shape != (2,):
         raise ValueError(f"{what} must return two numbers (x, y), got {value!r}")
     if not np.all(np.isfinite(a)):
         raise ValueError(f"{what} returned a value that is not finite: {value!r}")
@@ -170,8 +173,13 @@ class AccelerationHistory:
         if h <= 0.0:
             return u0.copy(), v0.copy(), (t0, v0, u0)
         s = h * _GL_X
-        a = np.array([_as_xy(self._callable(t0 + si), f"{self.name}: acceleration(t)")
-                      for si in s])
+        values = [self._callable(t0 + si) for si in s]
+        try:  # checked as a whole; one by one (for the message) only when that fails
+            a = np.array(values, dtype=float)
+        except (TypeError, ValueError):
+            a = None
+        if a is None or a.shape != (len(s), 2) or not np.isfinite(a).all():
+            a = np.array([_as_xy(v, f"{self.name}: acceleration(t)") for v in values])
         v = v0 + h * (_GL_W @ a)
         u = u0 + v0 * h + h * ((_GL_W * (h - s)) @ a)
         return u.copy(), v.copy(), (t, v, u)

@@ -98,3 +98,20 @@ def test_progress_bar_reports_on_stderr(capsys):
     dda.Simulation(scene, dt=1e-2).run(duration=0.5, progress=True)
     err = capsys.readouterr().err
     assert "100.0%" in err and "t =" in err
+
+
+@pytest.mark.parametrize(("value", "message"), [
+    ((1.0, 2.0, 3.0), "must return two numbers"), (None, "must return two numbers"),
+    ("ab", "must return two numbers"), ((np.nan, 0.0), "not finite"),
+    ((0.0, np.inf), "not finite")])
+def test_a_shake_function_that_returns_no_acceleration_is_named(value, message):
+    """A shaking function must give (x, y) numbers at every time it is asked for; anything
+    else is refused with the effect's name and what it returned."""
+    bad_from = 0.05
+
+    def accel(t):
+        return value if t >= bad_from else (0.0, 0.0)
+
+    hist = AccelerationHistory(accel, name="table shake")
+    with pytest.raises(ValueError, match=f"table shake: acceleration.*{message}"):
+        hist.advance(hist.initial(), 0.1)
