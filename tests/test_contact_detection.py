@@ -142,3 +142,30 @@ def test_compiled_vertex_turns_are_the_numpy_ones():
                           got, strict=True):
         np.testing.assert_array_equal(have, want)
     assert topo.straight(x).sum() == 40
+
+
+def test_carrying_the_same_contacts_over_keeps_everything():
+    """A detection that finds the very contacts of the last step, in the same order, takes
+    the short way; it gives what matching them one by one gives (the same contacts found in
+    the reverse order go the long way)."""
+    import dda
+    from dda.contact.contacts import carry_over
+    from dda.contact.detection import CandidateContacts
+    from tests.stability import scenes
+
+    sim = dda.Simulation(scenes.shaken_cut_slope()[0], dt=2e-3)
+    sim.run(0.02, progress=False)
+    old, x, topo = sim.state.contacts, sim.state.x, sim.model.topo
+    assert np.any(old.state == 0) and np.any(old.state != 0)
+    same = CandidateContacts(old.vertex, old.edge, old.bj, old.bk)
+    back = np.arange(len(old))[::-1]
+    reverse = CandidateContacts(old.vertex[back], old.edge[back], old.bj[back], old.bk[back])
+    fast, fresh_fast, _ = carry_over(old, same, x, topo.nxt, topo.prv, sim.model.n_blocks)
+    slow, fresh_slow, _ = carry_over(old, reverse, x, topo.nxt, topo.prv, sim.model.n_blocks)
+    order = np.argsort(back)
+    np.testing.assert_array_equal(fresh_fast, fresh_slow[order])
+    for name in ("vertex", "edge", "bj", "bk", "state", "xi0", "t_n", "t_s"):
+        np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name)[order])
+    assert fast.history.keys() == slow.history.keys()
+    for key in fast.history:
+        np.testing.assert_array_equal(fast.history[key], slow.history[key][order])
