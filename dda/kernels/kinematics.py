@@ -30,26 +30,16 @@ def first_variations(p1, p2, p3, xi0, a1, a2, a3):
     ``da = a1 - a2``, ``db = a3 - a2``.
     """
     m = p1.shape[0]
-    length = np.empty(m)
-    tau = np.empty((m, 2))
-    normal = np.empty((m, 2))
-    gap = np.empty(m)
-    xi = np.empty(m)
+    length, tau, normal, gap, xi = frames(p1, p2, p3)
     shear = np.empty(m)
     e_row = np.empty((m, 12))
     i_row = np.empty((m, 12))
     for c in range(m):
-        ln, t0, t1, n0, n1, g, x = _frame(p1[c, 0], p1[c, 1], p2[c, 0], p2[c, 1], p3[c, 0],
-                                          p3[c, 1])
-        length[c] = ln
-        tau[c, 0] = t0
-        tau[c, 1] = t1
-        normal[c, 0] = n0
-        normal[c, 1] = n1
-        gap[c] = g
-        xi[c] = x
-        shear[c] = (x - xi0[c]) * ln
-        ratio = g / ln
+        n0, n1 = normal[c, 0], normal[c, 1]
+        t0, t1 = tau[c, 0], tau[c, 1]
+        x = xi[c]
+        shear[c] = (x - xi0[c]) * length[c]
+        ratio = gap[c] / length[c]
         for j in range(12):
             da0 = a1[c, 0, j] - a2[c, 0, j]
             da1 = a1[c, 1, j] - a2[c, 1, j]
