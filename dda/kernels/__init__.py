@@ -13,8 +13,9 @@
 - :mod:`dda.kernels.geometry`: polygon integrals, the turn and bisector of every vertex;
 - :mod:`dda.kernels.forces`: the recorder's force sums per block pair.
 
-Each gives the numbers of the numpy code it replaced, to the bit (the tests compare them): on
-the few contacts of a small scene numpy's per-call overhead, not the arithmetic, was the cost.
+The kinematics, friction, faces, geometry and forces kernels give the numbers of the numpy
+code they replaced, to the bit (the tests compare them): on the few contacts of a small
+scene numpy's per-call overhead, not the arithmetic, was the cost.
 
 The kernels compile on their first call (``cache=True``: once per machine, then loaded from
 ``__pycache__``).
