@@ -169,3 +169,34 @@ def test_carrying_the_same_contacts_over_keeps_everything():
     assert fast.history.keys() == slow.history.keys()
     for key in fast.history:
         np.testing.assert_array_equal(fast.history[key], slow.history[key][order])
+
+
+def test_compiled_boxes_and_broad_phase_are_the_numpy_ones():
+    """Bounding boxes and the broad phase's pairs (in their order) are numpy's, from one
+    compiled pass each: boxes of any spread, ties in the sort, zero and positive margins."""
+    from dda.contact.detection import _sweep, bounding_boxes, broad_phase
+
+    rng = np.random.default_rng(0)
+    for trial in range(200):
+        n = int(rng.integers(2, 300))
+        centre = rng.uniform(0, rng.choice([1.0, 10.0, 100.0]), (n, 2))
+        centre[:, 1] *= rng.choice([0.1, 1.0, 10.0])
+        if trial % 7 == 0:
+            centre = np.round(centre)  # equal lower bounds: the stable sort decides
+        half = rng.uniform(0.1, 2.0, (n, 2))
+        boxes = np.concatenate([centre - half, centre + half], axis=1)
+        margin = float(rng.choice([0.0, 0.01, 0.5]))
+        lo, hi = boxes[:, :2] - margin, boxes[:, 2:] + margin
+        mid = 0.5 * (lo + hi)
+        axis = int(np.argmax(mid.max(axis=0) - mid.min(axis=0)))
+        order = np.argsort(lo[:, axis], kind="stable")
+        stop = np.searchsorted(lo[order, axis], hi[order, axis], side="right")
+        want = _sweep(order, stop, lo[:, 1 - axis].copy(), hi[:, 1 - axis].copy())
+        np.testing.assert_array_equal(broad_phase(boxes, margin), want)
+        offsets = np.concatenate([[0], np.cumsum(rng.integers(3, 7, n))])
+        x = rng.normal(size=(offsets[-1], 2))
+        start = offsets[:-1]
+        np.testing.assert_array_equal(
+            bounding_boxes(x, offsets),
+            np.concatenate([np.minimum.reduceat(x, start, axis=0),
+                            np.maximum.reduceat(x, start, axis=0)], axis=1))

@@ -176,10 +176,23 @@ def _outward_bisector(a, b):
 
 def bounding_boxes(x: np.ndarray, offsets: np.ndarray) -> np.ndarray:
     """(n_blocks, 4) boxes [xmin, ymin, xmax, ymax]."""
-    starts = offsets[:-1]
-    lo = np.minimum.reduceat(x, starts, axis=0)
-    hi = np.maximum.reduceat(x, starts, axis=0)
-    return np.concatenate([lo, hi], axis=1)
+    return _boxes(np.ascontiguousarray(x, dtype=np.float64), offsets)
+
+
+@njit(cache=True)
+def _boxes(x, offsets):
+    n = offsets.shape[0] - 1
+    out = np.empty((n, 4))
+    for b in range(n):
+        start = offsets[b]
+        out[b, 0], out[b, 1] = x[start, 0], x[start, 1]
+        out[b, 2], out[b, 3] = x[start, 0], x[start, 1]
+        for v in range(start + 1, offsets[b + 1]):
+            out[b, 0] = min(out[b, 0], x[v, 0])
+            out[b, 1] = min(out[b, 1], x[v, 1])
+            out[b, 2] = max(out[b, 2], x[v, 0])
+            out[b, 3] = max(out[b, 3], x[v, 1])
+    return out
 
 
 def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
@@ -189,19 +202,35 @@ def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     searchsorted in numpy, then a compiled loop over the boxes each box's interval reaches,
     so the cost is O(N log N + candidate pairs).
     """
-    n = len(boxes)
-    if n < 2:
+    if len(boxes) < 2:
         return np.zeros((0, 2), dtype=np.int64)
-    lo = boxes[:, :2] - margin
-    hi = boxes[:, 2:] + margin
-    centres = 0.5 * (lo + hi)
-    axis = int(np.argmax(centres.max(axis=0) - centres.min(axis=0)))
+    return _broad_phase(np.ascontiguousarray(boxes, dtype=np.float64), float(margin))
+
+
+@njit(cache=True)
+def _broad_phase(boxes, margin):
+    """:func:`broad_phase` compiled: the grown boxes, the axis of larger spread of their
+    centres (the first on a tie), a stable sort along it, each box's reach in the sorted
+    order (``searchsorted`` to the right), then :func:`_sweep`."""
+    n = boxes.shape[0]
+    lo = np.empty((n, 2))
+    hi = np.empty((n, 2))
+    spread = np.empty(2)
+    for a in range(2):
+        cmin, cmax = np.inf, -np.inf
+        for b in range(n):
+            lo[b, a] = boxes[b, a] - margin
+            hi[b, a] = boxes[b, 2 + a] + margin
+            c = 0.5 * (lo[b, a] + hi[b, a])
+            cmin = min(cmin, c)
+            cmax = max(cmax, c)
+        spread[a] = cmax - cmin
+    axis = 0 if spread[0] >= spread[1] else 1
     other = 1 - axis
-    order = np.argsort(lo[:, axis], kind="stable")
+    order = np.argsort(lo[:, axis], kind="mergesort")
     lo_sorted = lo[order, axis]
     stop = np.searchsorted(lo_sorted, hi[order, axis], side="right")
-    return _sweep(order, stop, np.ascontiguousarray(lo[:, other]),
-                  np.ascontiguousarray(hi[:, other]))
+    return _sweep(order, stop, lo[:, other].copy(), hi[:, other].copy())
 
 
 @njit(cache=True)
