@@ -376,8 +376,9 @@ def narrow_phase(
                     sunk[order], np.arange(len(vertex)))
     c = _drop_mirrored(c, x, topo, margin)
     r = c.row
-    geometry = ContactGeometry(frame.p1[r], frame.p2[r], frame.p3[r], frame.length[r],
-                               frame.tau[r], frame.normal[r], frame.gap[r], frame.xi[r])
+    geometry = frame if len(r) == len(vertex) else ContactGeometry(  # (none dropped)
+        frame.p1[r], frame.p2[r], frame.p3[r], frame.length[r], frame.tau[r],
+        frame.normal[r], frame.gap[r], frame.xi[r])
     return CandidateContacts(vertex=c.vertex, edge=c.edge, bj=topo.block[c.vertex],
                              bk=c.kblock, pairs=len(pairs), geometry=geometry)
 
