@@ -199,3 +199,31 @@ def test_compiled_gather_matches_numpy():
             expected = np.where(k[start][pos] == want, reduce.reduceat(v, start)[pos], 0.0)
             got = penetration._gather(keys, values, want, reduce)
             np.testing.assert_allclose(got, expected, rtol=1e-14, atol=1e-14)
+
+
+def test_compiled_untracked_depth_is_the_numpy_one():
+    """How much deeper each penetration is than the springs holding it comes from one
+    compiled pass: the numpy version's numbers to the bit, on a shaken jointed slope."""
+    import dda
+    from dda.contact import penetration
+    from dda.contact.penetration import untracked_depth, vertex_penetrations
+    from tests.stability import scenes
+
+    sim = dda.Simulation(scenes.shaken_cut_slope()[0], dt=2e-3)
+    sim.run(0.05, progress=False)
+    c, topo = sim.state.contacts, sim.model.topo
+    pen = vertex_penetrations(sim.state.x, topo)
+    p_n = np.full(len(c), 1e9)
+    closed = (c.state != 0).nonzero()[0]
+    assert len(pen) > 10 and len(closed) > 10
+    spring = -c.t_n[closed] / p_n[closed]
+    nb = len(topo.offsets)
+    want = pen.vertex * nb + pen.block
+    held_own = np.sqrt(penetration._gather(c.vertex[closed] * nb + c.bk[closed], spring**2,
+                                           want, np.add))
+    edge_end = np.concatenate([c.edge[closed], topo.nxt[c.edge[closed]]])
+    held_mirror = penetration._gather(
+        edge_end * nb + np.concatenate([c.bj[closed], c.bj[closed]]),
+        np.concatenate([spring, spring]), want, np.maximum)
+    np.testing.assert_array_equal(untracked_depth(pen, c, p_n, topo),
+                                  pen.depth - np.maximum(held_own, held_mirror))

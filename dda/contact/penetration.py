@@ -124,24 +124,50 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
     if len(pen) == 0:
         return np.zeros(0)
     c = contacts
-    closed = (c.state != OPEN).nonzero()[0]
-    if len(closed) == 0:
+    if not np.any(c.state != OPEN):
         return pen.depth.copy()
-    spring = -c.t_n[closed] / normal_penalty[closed]
-    nb = len(topo.offsets)
-    want = pen.vertex * nb + pen.block
-    # the vertex's own springs against that block: one for a convex block; two at a reflex
-    # corner, where the vertex is deepest from the corner point itself and the two lines'
-    # gaps add up to it as the sides of a right triangle (exact for a square corner)
-    own = c.vertex[closed] * nb + c.bk[closed]
-    held_own = np.sqrt(_gather(own, spring**2, want, np.add))
-    # the mirror image of a vertex-vertex contact: a closed contact between the same blocks
-    # whose contacted edge ends at the vertex
-    edge_end = np.concatenate([c.edge[closed], topo.nxt[c.edge[closed]]])
-    mirrored = edge_end * nb + np.concatenate([c.bj[closed], c.bj[closed]])
-    held_mirror = _gather(mirrored, np.concatenate([spring, spring]), want, np.maximum)
-    held = np.maximum(held_own, held_mirror)
-    return pen.depth - held
+    ints = [np.asarray(a, dtype=np.int64) for a in (pen.vertex, pen.block, c.vertex, c.edge,
+                                                      c.bj, c.bk, topo.nxt)]
+    return _untracked_kernel(np.asarray(c.state, dtype=np.int8),
+                             np.ascontiguousarray(c.t_n, dtype=np.float64),
+                             np.ascontiguousarray(normal_penalty, dtype=np.float64),
+                             np.ascontiguousarray(pen.depth, dtype=np.float64), *ints,
+                             len(topo.offsets))
+
+
+@njit(cache=True)
+def _untracked_kernel(state, t_n, normal_penalty, depth, pen_vertex, pen_block, vertex, edge,
+                      bj, bk, nxt, nb):
+    """:func:`untracked_depth` in one compiled pass, the numpy version's arithmetic."""
+    closed = np.flatnonzero(state != 0)
+    n = closed.shape[0]
+    spring = np.empty(n)
+    spring_sq = np.empty(n)
+    own = np.empty(n, dtype=np.int64)
+    mirrored = np.empty(2 * n, dtype=np.int64)
+    twice = np.empty(2 * n)
+    for k in range(n):
+        c = closed[k]
+        spring[k] = -t_n[c] / normal_penalty[c]
+        spring_sq[k] = spring[k] ** 2
+        # the vertex's own springs against that block: one for a convex block; two at a
+        # reflex corner, where the vertex is deepest from the corner point itself and the
+        # two lines' gaps add up to it as the sides of a right triangle (exact for a
+        # square corner)
+        own[k] = vertex[c] * nb + bk[c]
+        # the mirror image of a vertex-vertex contact: a closed contact between the same
+        # blocks whose contacted edge ends at the vertex
+        mirrored[k] = edge[c] * nb + bj[c]
+        mirrored[n + k] = nxt[edge[c]] * nb + bj[c]
+        twice[k] = spring[k]
+        twice[n + k] = spring[k]
+    want = pen_vertex * nb + pen_block
+    held_own = np.sqrt(_gather_kernel(own, spring_sq, want, False))
+    held_mirror = _gather_kernel(mirrored, twice, want, True)
+    out = np.empty(want.shape[0])
+    for w in range(want.shape[0]):
+        out[w] = depth[w] - max(held_own[w], held_mirror[w])
+    return out
 
 
 def _gather(keys, values, want, reduce) -> np.ndarray:
