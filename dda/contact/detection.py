@@ -113,25 +113,12 @@ class VertexTopology:
         """Results derived from the block pairs alone, kept from step to step."""
         return Memo()
 
-    def _turn(self, x: np.ndarray, index=None):
-        """The arms a = prev - v and b = next - v of every vertex (or of ``index``), the
-        cross product a x b and its round-off scale |a| |b|."""
-        v = slice(None) if index is None else index
-        p = x if index is None else x[index]
-        a = x[self.prv[v]] - p
-        b = x[self.nxt[v]] - p
-        cross = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
-        return a, b, cross, np.hypot(a[:, 0], a[:, 1]) * np.hypot(b[:, 0], b[:, 1])
-
     def straight(self, x: np.ndarray, index=None) -> np.ndarray:
         """Whether each vertex (or each of ``index``) lies on the straight line of its two
         edges (to round-off): a point of a side, not a corner."""
-        if index is None:
-            cross, scale, dot, _ = self.turns(x)
-        else:
-            a, b, cross, scale = self._turn(x, index)
-            dot = np.einsum("ij,ij->i", a, b)
-        return (np.abs(cross) <= 1e-9 * scale) & (dot < 0.0)
+        cross, scale, dot, _ = self.turns(x)
+        straight = (np.abs(cross) <= 1e-9 * scale) & (dot < 0.0)
+        return straight if index is None else straight[index]
 
     def reflex(self, x: np.ndarray) -> np.ndarray:
         """Whether each vertex is reflex (its interior angle above 180 degrees by more than
@@ -147,31 +134,8 @@ class VertexTopology:
     def turns(self, x: np.ndarray):
         """Per vertex: the cross product ``a x b`` of its arms (a to prev, b to next), its
         round-off scale ``|a| |b|``, their dot product and the outward unit bisector, in one
-        compiled pass (:func:`dda.kernels.geometry.vertex_turns`; the numbers of
-        :meth:`_turn` and :func:`_outward_bisector` to the bit)."""
+        compiled pass (:func:`dda.kernels.geometry.vertex_turns`)."""
         return vertex_turns(np.ascontiguousarray(x, dtype=np.float64), self.prv, self.nxt)
-
-
-def _norm(v):
-    """Row norms of (n, 2) ``v``: ``np.linalg.norm(v, axis=1)`` to the bit, without its
-    overhead."""
-    return np.sqrt(v[:, 0] * v[:, 0] + v[:, 1] * v[:, 1])
-
-
-def _outward_bisector(a, b):
-    """The outward unit bisector of vertices with arms a (to prev) and b (to next)."""
-    ua = a / _norm(a)[:, None]
-    ub = b / _norm(b)[:, None]
-    inward = ua + ub
-    norm = _norm(inward)
-    # a straight vertex has no bisector; its inward normal is the left normal of prev->next
-    straight = norm < 1e-12
-    if straight.any():
-        left = np.stack([-ub[:, 1], ub[:, 0]], axis=1)
-        inward = np.where(straight[:, None], left, inward / np.maximum(norm, 1e-300)[:, None])
-    else:
-        inward = inward / np.maximum(norm, 1e-300)[:, None]
-    return -inward
 
 
 def bounding_boxes(x: np.ndarray, offsets: np.ndarray) -> np.ndarray:

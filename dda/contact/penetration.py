@@ -170,17 +170,10 @@ def _untracked_kernel(state, t_n, normal_penalty, depth, pen_vertex, pen_block, 
     return out
 
 
-def _gather(keys, values, want, reduce) -> np.ndarray:
-    """For each of ``want``, ``reduce`` (np.add or np.maximum) of the values whose key it is
-    (0 where none is)."""
-    return _gather_kernel(np.asarray(keys, dtype=np.int64),
-                          np.ascontiguousarray(values, dtype=np.float64),
-                          np.asarray(want, dtype=np.int64), reduce is np.maximum)
-
-
 @njit(cache=True)
 def _gather_kernel(keys, values, want, use_max):
-    """:func:`_gather` compiled: the values sorted by key (stable) and reduced run by run as
+    """For each of ``want``, the sum (or with ``use_max`` the largest) of the values whose key
+    it is, 0 where none is: the values sorted by key (stable) and reduced run by run as
     ``numpy.add.reduceat`` / ``numpy.maximum.reduceat`` of the sorted runs do (the sum in
     numpy's order: the first value plus the pairwise sum of the others), to the bit."""
     order = np.argsort(keys, kind="mergesort")
