@@ -56,7 +56,7 @@ PHI_S, PHI_D = 40.5, 31.6
 LEVELS = 8
 JOINTS = {
     "single": (lambda: CoulombSingle(PHI_S), None),
-    "transition": (lambda: StaticDynamicTransition(PHI_S, PHI_D), PHI_D),
+    "transition": (lambda: StaticDynamicTransition(PHI_S, PHI_D, onset="contact"), PHI_D),
     "face": (lambda: StaticDynamicTransition(PHI_S, PHI_D, onset="face"), PHI_D),
 }
 LABELS = {"single": "one angle", "transition": "transition, per-contact onset",
@@ -129,6 +129,23 @@ def plot(runs: list[dict], table, path: Path):
     plt.close(fig)
 
 
+def write_csv(runs: list[dict], table, path: Path):
+    """The slides of every run and their rigid blocks on the first run's record times.
+
+    A run whose steps were cut has records at other times than the others (the stopper's
+    impact cuts steps), so each is interpolated linearly onto the first run's times.
+    """
+    grid = runs[0]["time"]
+    columns = [np.interp(grid, r["time"], r[k]) for r in runs for k in ("slide", "rigid")]
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time_s", "table_gal"] + [f"{r['joint']}_{k}_mm" for r in runs
+                                                for k in ("dda", "rigid")])
+        for i, ti in enumerate(grid):
+            w.writerow([f"{ti:.4f}", f"{100 * table(ti)[0]:.2f}"]
+                       + [f"{1e3 * c[i]:.4f}" for c in columns])
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="out/rock_slope", help="output folder")
@@ -155,13 +172,7 @@ def main(argv=None):
             writer = dda.io.VTUWriter(out / "rock_slope", every=max(1, round(0.02 / dt)))
         runs.append(run_joint(name, table, duration, dt, writer))
     plot(runs, table, out / "rock_slope.png")
-    with open(out / "rock_slope.csv", "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["time_s", "table_gal"] + [f"{r['joint']}_{k}_mm" for r in runs
-                                                for k in ("dda", "rigid")])
-        for i, ti in enumerate(runs[0]["time"]):
-            w.writerow([f"{ti:.4f}", f"{100 * table(ti)[0]:.2f}"]
-                       + [f"{1e3 * r[k][i]:.4f}" for r in runs for k in ("slide", "rigid")])
+    write_csv(runs, table, out / "rock_slope.csv")
     print(f"rock slope, 2 Hz to 670 gal in {LEVELS} steps of {args.hold:g} s, dt {dt:g} s")
     print("joint       start DDA  start rigid  compared until  DDA (mm)  rigid (mm)  "
           "largest gap  wall (s)  dt cuts")

@@ -74,6 +74,20 @@ def test_rock_slope_example(tmp_path, capsys):
     assert at(face, 3.0) > 5 * at(single, 3.0)
 
 
+def test_rock_slope_csv_takes_runs_recorded_at_other_times(tmp_path):
+    """A run whose steps were cut has more records than the others (the 16 s default run
+    failed with an IndexError): its slide is interpolated onto the first run's times."""
+    t1, t2 = np.linspace(0.0, 1.0, 5), np.array([0.0, 0.25, 0.3, 0.5, 0.6, 0.75, 1.0])
+    runs = [{"joint": "single", "time": t1, "slide": t1 * 1e-3, "rigid": t1 * 2e-3},
+            {"joint": "face", "time": t2, "slide": t2 * 3e-3, "rigid": t2 * 4e-3}]
+    load("rock_slope").write_csv(runs, lambda t: (0.5, 0.0), tmp_path / "r.csv")
+    rows = csv_rows(tmp_path / "r.csv")
+    assert [float(r["time_s"]) for r in rows] == pytest.approx(t1)
+    assert [float(r["face_dda_mm"]) for r in rows] == pytest.approx(3.0 * t1)
+    assert [float(r["face_rigid_mm"]) for r in rows] == pytest.approx(4.0 * t1)
+    assert float(rows[2]["table_gal"]) == 50.0
+
+
 def test_rock_slope_example_names_unknown_joints(tmp_path):
     with pytest.raises(SystemExit):
         load("rock_slope").main(["--out", str(tmp_path), "--joints", "single,glue"])
