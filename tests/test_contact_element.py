@@ -11,7 +11,8 @@ from tests.conftest import box, capture_step_problem, wedge_scene
 
 LAWS = {
     "coulomb": lambda: CoulombSingle(phi=20.0),
-    "static-dynamic": lambda: StaticDynamicTransition(phi_static=20.0, phi_dynamic=15.0),
+    "static-dynamic": lambda: StaticDynamicTransition(phi_static=20.0, phi_dynamic=15.0,
+                                                       onset="contact"),
     "static-dynamic-face": lambda: StaticDynamicTransition(phi_static=20.0, phi_dynamic=15.0,
                                                            onset="face"),
 }

@@ -134,8 +134,12 @@ def test_without_faces_the_face_law_judges_each_contact():
 def test_onset_is_checked():
     with pytest.raises(ValueError, match="onset"):
         StaticDynamicTransition(40.0, 30.0, onset="block")
-    assert "onset='face'" in repr(StaticDynamicTransition(40.0, 30.0, onset="face"))
-    assert StaticDynamicTransition(40.0, 30.0).uses_faces is False
+    assert "onset='contact'" in repr(StaticDynamicTransition(40.0, 30.0, onset="contact"))
+    assert "onset" not in repr(StaticDynamicTransition(40.0, 30.0, onset="face"))
+    # the rigid block's rule is the default (issue 20); the papers' per-contact one is asked for
+    assert StaticDynamicTransition(40.0, 30.0).uses_faces is True
+    assert StaticDynamicTransition(40.0, 30.0).onset == "face"
+    assert StaticDynamicTransition(40.0, 30.0, onset="contact").uses_faces is False
 
 
 def test_newton_converges_quadratically_with_face_onset():

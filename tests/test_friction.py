@@ -8,7 +8,8 @@ from hypothesis import strategies as st
 from dda.contact import CoulombSingle, StaticDynamicTransition
 
 LAWS = [CoulombSingle(phi=30.0), CoulombSingle(phi=36.4, cohesion=1e4)]
-ALL_LAWS = LAWS + [StaticDynamicTransition(phi_static=30.0, phi_dynamic=20.0)]
+ALL_LAWS = LAWS + [StaticDynamicTransition(phi_static=30.0, phi_dynamic=20.0),
+                   StaticDynamicTransition(phi_static=30.0, phi_dynamic=20.0, onset="contact")]
 
 
 @pytest.mark.parametrize("law", LAWS, ids=repr)
@@ -110,7 +111,7 @@ def test_static_dynamic_transition_checks_its_angles():
 
 @pytest.mark.parametrize("law", [
     CoulombSingle(phi=30.0), CoulombSingle(phi=25.0, cohesion=2e4),
-    StaticDynamicTransition(35.0, 20.0), StaticDynamicTransition(35.0, 20.0, onset="face")])
+    StaticDynamicTransition(35.0, 20.0, onset="contact"), StaticDynamicTransition(35.0, 20.0)])
 def test_compiled_return_map_is_the_numpy_one(law):
     """The built-in laws' compiled return map gives the numpy path's trial to the bit:
     sticking and slipping contacts, open ones (t_n >= 0), zero trials, faces of one to four

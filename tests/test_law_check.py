@@ -19,7 +19,7 @@ from examples.my_laws import BrittleCohesion
 PACKAGE_LAWS = [
     CoulombSingle(phi=30.0),
     CoulombSingle(phi=36.4, cohesion=1e4),
-    StaticDynamicTransition(phi_static=30.0, phi_dynamic=20.0),
+    StaticDynamicTransition(phi_static=30.0, phi_dynamic=20.0, onset="contact"),
     StaticDynamicTransition(phi_static=40.0, phi_dynamic=30.0, onset="face"),
     BartonBandis(jrc=10.0, jcs=50e6, phi_r=25.0),
     BartonBandis(jrc=15.0, jcs=100e6, phi_r=30.0, mobilized=False),

@@ -10,7 +10,7 @@ from dda.materials import LinearElastic
 
 __all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip",
            "stepped_table", "rock_slope", "slide_down_dip", "SLOPE_DIP", "SLOPE_STOP",
-           "ramped_sine", "stacked_cubes", "CUBE"]
+           "ramped_sine", "stacked_cubes", "CUBE", "shaken_incline"]
 
 G = 9.81
 
@@ -20,7 +20,7 @@ SHEAR_BOX_LENGTH = 0.1
 
 def shear_box(shear: float, friction=None, normal_stress: float = 1e6, young: float = 1e9,
               poisson: float = 0.2, penalty: float = 10e9, consolidation: float = 0.0,
-              loading_stiffness: float = 1e8):
+              loading_stiffness: float = 1e8, driven: str = "joint"):
     """Two elastic blocks sheared along their joint under a constant normal stress.
 
     The direct-shear case of H 3(1) and the simple-shear case of S 3(1): a lower block
@@ -32,8 +32,11 @@ def shear_box(shear: float, friction=None, normal_stress: float = 1e6, young: fl
     rises over several steps as in the papers' figures; acting at the level of the joint they
     put no moment on the block, so both joint contacts carry the same normal and shear force
     and yield together (pushed at its top, a block this tall would tip over its front corner
-    at P/N = w / 2h = 0.5 < tan 30 deg). The shear starts after ``consolidation`` seconds
-    under the normal stress alone. Run it as a static
+    at P/N = w / 2h = 0.5 < tan 30 deg). With ``driven="corners"`` all four corners are
+    driven, each through its own spring: the two at the top put a moment on the block, and
+    its joint's two contacts carry unequal normal forces (what tells the two onset rules of
+    :class:`dda.contact.StaticDynamicTransition` apart). The shear starts after
+    ``consolidation`` seconds under the normal stress alone. Run it as a static
     analysis with ``dt = 1 / n`` and ``consolidation = dt`` for n shear steps after one
     consolidation step, for ``1 + dt`` seconds.
 
@@ -51,9 +54,13 @@ def shear_box(shear: float, friction=None, normal_stress: float = 1e6, young: fl
     force = normal_stress * SHEAR_BOX_LENGTH / 2
     for corner in (top_left, top_right):
         scene.add_point_load(upper, point=corner, force=(0.0, -force))
+    points = {"joint": [(0.025, 0.1), (0.125, 0.1)],
+              "corners": [(0.025, 0.1), (0.125, 0.1), top_right, top_left]}
+    if driven not in points:
+        raise ValueError(f"shear_box: driven must be 'joint' or 'corners', got {driven!r}")
     scene.prescribe_motion(upper, displacement=lambda t: (shear * max(t - consolidation, 0.0),
                                                           None),
-                           penalty=loading_stiffness, points=[(0.025, 0.1), (0.125, 0.1)])
+                           penalty=loading_stiffness, points=points[driven])
     if friction is None:
         friction = CoulombSingle(phi=30.0)
     scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
@@ -223,3 +230,36 @@ def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: fl
                                   friction=CoulombSingle(phi=phi)))
     scene.shake(base, acceleration=table)
     return scene, base, cubes
+
+
+def shaken_incline(friction, table, dip: float = 20.0, penalty: float = 1e9,
+                   width: float = 0.2, height: float = 0.1):
+    """A block on a plane dipping ``dip`` degrees, on a shaking table: the rigid-block case of
+    :func:`dda.studies.references.sliding_block` with an elastic block of its own size.
+
+    A fixed lower block (1.2 m long) whose top face dips towards +x, and a ``width`` x
+    ``height`` block (E 7 GPa, nu 0.25, 2500 kg/m^3) resting on the face 0.2 m from its top
+    edge. ``table`` is the lower block's acceleration ``t -> (a_x, a_y)``; the joint has
+    ``penalty`` N/m normal and shear.
+
+    Returns
+    -------
+    scene, lower, block, down_dip
+        ``down_dip``: the unit vector down the face, for :func:`relative_slip`.
+    """
+    rock = LinearElastic(young=7e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=G)
+    b = np.radians(dip)
+    length, toe = 1.2, 0.1
+    top = toe + length * np.tan(b)
+    lower = scene.add_block([(0.0, 0.0), (length, 0.0), (length, toe), (0.0, top)], rock,
+                            fixed=True, name="lower")
+    along, normal = np.array([np.cos(b), -np.sin(b)]), np.array([np.sin(b), np.cos(b)])
+    p1 = np.array([0.2, top - 0.2 * np.tan(b)])
+    corners = [p1, p1 + width * along, p1 + width * along + height * normal,
+               p1 + height * normal]
+    block = scene.add_block([tuple(map(float, c)) for c in corners], rock, name="block")
+    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
+                                  friction=friction))
+    scene.shake(lower, acceleration=table)
+    return scene, lower, block, (float(along[0]), float(along[1]))

@@ -39,7 +39,7 @@ def single():
 
 @pytest.fixture(scope="module")
 def transition():
-    return run(StaticDynamicTransition(PHI_S, PHI_D), PHI_D)
+    return run(StaticDynamicTransition(PHI_S, PHI_D, onset="contact"), PHI_D)
 
 
 @pytest.fixture(scope="module")
