@@ -23,11 +23,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dda import geometry
-from dda.contact.contacts import ContactSet, carry_over
+from dda.contact.contacts import OPEN, ContactSet, carry_over
 from dda.contact.detection import (
     CandidateContacts,
     bounding_boxes,
     broad_phase,
+    keep_closed,
     narrow_phase,
 )
 from dda.contact.element import ContactElement, LawGroups
@@ -232,6 +233,9 @@ def _detect(model, state, d0, tolerance) -> _Detected:
             sunk = 0.25 * tolerance * model.min_thickness
             pairs = _pairs(model, state.x, max(d0, pen_limit))
             cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk)
+            closed = state.contacts.state != OPEN
+            cand = keep_closed(cand, state.contacts.vertex[closed], state.contacts.edge[closed],
+                               state.x, topo, d0, pen_limit, model.n_blocks)
             contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt,
                                                topo.prv, model.n_blocks)
     else:  # a single block: nothing to detect

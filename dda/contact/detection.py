@@ -50,7 +50,7 @@ from dda.geometry import next_vertex_index, polygon_integrals
 from dda.kernels.geometry import vertex_turns
 
 __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts",
-           "inside_depth"]
+           "inside_depth", "keep_closed"]
 
 ENTRANCE_TOLERANCE_DEG = 20.0
 _XI_TOL = 1e-9
@@ -236,6 +236,57 @@ class CandidateContacts:
 
     def __len__(self):
         return len(self.vertex)
+
+
+def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
+                search_distance: float, penetration_limit: float,
+                n_blocks: int) -> CandidateContacts:
+    """The candidates plus every closed contact of the last step that the narrow phase did not
+    find again but whose vertex still lies over its edge (foot parameter in [0, 1] up to
+    round-off) within ``[-penetration_limit, search_distance]`` of its line.
+
+    The narrow phase's rules pick the edge a vertex *enters* by; once a contact is closed, its
+    vertex may sink where those rules no longer see it. Where blocks stand corner on corner
+    (a column, a wall's bond) a loaded corner sinks into the block below exactly along its side
+    face's line: it is no distance inside that block, so the rule against far edges ("no
+    deeper behind the edge's line than inside the block") dropped its contact, and the block
+    fell through (``tests/stability/test_hard_cases.py``). A contact is not added back when
+    its vertex has a candidate against the same block (it moved on to another edge, which
+    :func:`dda.contact.contacts.carry_over` follows) or when the corner at either end of its
+    edge has a candidate against the vertex's block (the mirrored vertex-vertex pair that the
+    narrow phase kept instead).
+    """
+    if len(closed_vertex) == 0:
+        return cand
+    blk = topo.block
+    old_k = blk[closed_edge]
+    mine = np.isin(closed_vertex * n_blocks + old_k, cand.vertex * n_blocks + cand.bk)
+    corner_keys = cand.vertex * n_blocks + cand.bk
+    j = blk[closed_vertex]
+    mirrored = (np.isin(closed_edge * n_blocks + j, corner_keys)
+                | np.isin(topo.nxt[closed_edge] * n_blocks + j, corner_keys))
+    lost = np.flatnonzero(~mine & ~mirrored)
+    if len(lost) == 0:
+        return cand
+    frame = contact_geometry(x, closed_vertex[lost], closed_edge[lost], topo.nxt)
+    keep = ((frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL)
+            & (frame.gap <= search_distance) & (frame.gap >= -penetration_limit))
+    if not keep.any():
+        return cand
+    lost = lost[keep]
+    vertex = np.concatenate([cand.vertex, closed_vertex[lost]])
+    edge = np.concatenate([cand.edge, closed_edge[lost]])
+    bk = np.concatenate([cand.bk, old_k[lost]])
+    order = np.argsort(vertex * n_blocks + bk, kind="stable")
+    geometry = None
+    if cand.geometry is not None or len(cand) == 0:
+        new = ContactGeometry(*(getattr(frame, name)[keep]
+                                for name in ContactGeometry.__dataclass_fields__))
+        parts = [new] if cand.geometry is None else [cand.geometry, new]
+        geometry = ContactGeometry(*(np.concatenate([getattr(g, name) for g in parts])[order]
+                                     for name in ContactGeometry.__dataclass_fields__))
+    return CandidateContacts(vertex=vertex[order], edge=edge[order], bj=blk[vertex[order]],
+                             bk=bk[order], pairs=cand.pairs, geometry=geometry)
 
 
 def _empty_candidates(pairs: int) -> CandidateContacts:
