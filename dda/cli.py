@@ -29,13 +29,16 @@ def _run_scene(path, out, duration, progress):
     if out is None and loaded.output_dir is None:
         out = Path("out") / Path(path).stem
     writer = loaded.writer(out)
-    print(f"{loaded.path.name}: {len(loaded.blocks)} blocks, solver {loaded.solver!r}, "
-          f"dt {loaded.settings['dt']:g} s")
     duration = duration if duration is not None else loaded.duration
     if duration is None:
         raise SystemExit(f"{loaded.path.name}: give [simulation] duration or --duration")
+    sim = loaded.simulation()
+    print(f"{loaded.path.name}: {len(loaded.blocks)} blocks, solver {loaded.solver!r}, "
+          f"dt {sim.dt:g} s")
+    for line in sim.choices.splitlines():  # what "auto" settings chose, and why
+        print(f"  auto: {line}")
     ckpt = loaded.checkpoint_settings(out)
-    result = loaded.simulation().run(duration, output=writer, progress=progress, **ckpt)
+    result = sim.run(duration, output=writer, progress=progress, **ckpt)
     print(result.stats.summary())
     if writer is not None:
         print(f"wrote {len(writer.files)} VTU files and {writer.pvd_path}")
@@ -132,6 +135,9 @@ def describe(loaded, timed_steps: int = 3) -> str:
         f"effects    {', '.join(loaded.effects) or 'none'}",
         f"solver     {loaded.solver!r}, dt {sim.dt:g} s, {sim.analysis}",
     ]
+    # what "auto" settings chose, and why (dda.auto_settings)
+    lines += [("auto       " if k == 0 else "           ") + line
+              for k, line in enumerate(sim.choices.splitlines())]
     if loaded.duration is not None:
         steps = int(np.ceil(loaded.duration / sim.dt - 1e-9))
         start = time.perf_counter()

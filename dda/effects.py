@@ -141,6 +141,25 @@ class AccelerationHistory:
         """Last time the history covers (inf for a callable)."""
         return np.inf if self._callable is not None else float(self._times[-1])
 
+    @property
+    def min_spacing(self) -> float:
+        """The finest spacing of a record's samples (s); inf for a callable."""
+        return np.inf if self._callable is not None else float(np.diff(self._times).min())
+
+    def sample(self, t: np.ndarray) -> np.ndarray:
+        """(n, 2) acceleration at the times ``t`` (a record: linear between its samples)."""
+        t = np.asarray(t, dtype=float)
+        if self._callable is not None:
+            values = [self._callable(ti) for ti in t]
+            try:  # checked as a whole; one by one (for the message) only when that fails
+                a = np.array(values, dtype=float)
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.shape != (len(t), 2) or not np.isfinite(a).all():
+                a = np.array([_as_xy(v, f"{self.name}: acceleration(t)") for v in values])
+            return a.reshape(-1, 2)
+        return np.stack([np.interp(t, self._times, self._acc[:, k]) for k in (0, 1)], axis=1)
+
     def check_covers(self, t_end: float):
         """Raise ValueError when a recorded history ends before ``t_end``."""
         if t_end > self.end_time * (1 + 1e-12):

@@ -8,7 +8,7 @@ CLI, the pictures and anyone who wants to look inside a run (``Simulation.model`
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -68,11 +68,25 @@ class JointTable:
         fields = {}
         for law in laws:
             fields.update(law.history_fields())
+        # "auto" penalties are NaN until the simulation chooses them (:meth:`with_penalties`)
         return cls(default, keys[order], ids[order],
-                   np.array([j.normal_penalty for j in joints], dtype=float),
-                   np.array([j.shear_penalty for j in joints], dtype=float),
+                   np.array([_penalty(j.normal_penalty) for j in joints], dtype=float),
+                   np.array([_penalty(j.shear_penalty) for j in joints], dtype=float),
                    np.array([law_of[id(j.friction)] for j in joints], dtype=np.int64),
                    tuple(laws), fields)
+
+    @property
+    def auto(self) -> bool:
+        """Whether some penalty is still "auto" (NaN)."""
+        return bool(np.isnan(self.normal_penalty).any() or np.isnan(self.shear_penalty).any())
+
+    def with_penalties(self, normal: float, shear: float) -> JointTable:
+        """The table with its "auto" normal and shear penalties set (a shear penalty left
+        "auto" beside a given normal one takes that normal one)."""
+        pn = np.where(np.isnan(self.normal_penalty), normal, self.normal_penalty)
+        ps = np.where(np.isnan(self.shear_penalty),
+                      np.where(np.isnan(self.normal_penalty), shear, pn), self.shear_penalty)
+        return replace(self, normal_penalty=pn, shear_penalty=ps)
 
     def index(self, keys: np.ndarray) -> np.ndarray:
         """Row of the joint of each block pair (given by its pair key); -1 where none."""
@@ -276,3 +290,7 @@ class Model:
             np.add.at(k, self.spring_block, p[:, None, None] * np.einsum("vij,vik->vjk", t, t))
             np.add.at(f, self.spring_block, p[:, None] * np.einsum("vij,vi->vj", t, target))
         return k, m, c, f
+
+
+def _penalty(value) -> float:
+    return np.nan if isinstance(value, str) else float(value)

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from dda._checks import finite_number
+from dda.auto_settings import choose
 from dda.contact.contacts import OPEN, SLIP
 from dda.errors import SimulationError
 from dda.io.checkpoint import (
@@ -46,8 +47,10 @@ class Simulation:
     Parameters
     ----------
     scene : Scene
-    dt : float
+    dt : float or "auto"
         Step size (s). Steps are cut when a step does not converge and grow back afterwards.
+        ``"auto"``: chosen from the scene and the solver (:mod:`dda.auto_settings`), as are
+        the penalties of joints given as ``"auto"``; :attr:`choices` says what and why.
     solver : NonlinearSolver, optional
         How one step is solved: ``NewtonRaphson()`` (the default, fully implicit) or
         ``LegacyPullBack()`` (original DDA).
@@ -87,6 +90,9 @@ class Simulation:
         The committed state (``state`` is the same); :func:`dda.step.step` makes trials of it.
     control : dda.step_control.StepControl
         The step size now, cuts and growth.
+    choices : str
+        What was chosen for "auto" settings (dt, penalties) and why, one line each; empty
+        when nothing was "auto".
 
     Examples
     --------
@@ -106,7 +112,11 @@ class Simulation:
                  max_displacement_ratio: float = 0.25, penetration_tolerance: float = 0.01):
         if not isinstance(scene, Scene):
             raise TypeError(f"Simulation: scene must be a dda.Scene, got {scene!r}")
-        self.dt = finite_number("dt", dt, positive=True, where="Simulation")
+        auto_dt = isinstance(dt, str)
+        if auto_dt and dt != "auto":
+            raise ValueError(f"Simulation: dt must be a number (s) or 'auto', got {dt!r}")
+        self.dt = None if auto_dt else finite_number("dt", dt, positive=True,
+                                                     where="Simulation")
         if solver is None:
             solver = NewtonRaphson()
         if not isinstance(solver, NonlinearSolver):
@@ -135,6 +145,16 @@ class Simulation:
         self.record_every = int(record_every)
         self.output = output
         self.model = Model(scene)
+        self.choices = ""
+        if auto_dt or self.model.joints.auto:
+            choice = choose(self.model, solver, self.dt,
+                            shakes=[s.history for s in scene.shakes],
+                            auto_penalty=self.model.joints.auto)
+            self.dt = choice.dt
+            if self.model.joints.auto:
+                self.model.joints = self.model.joints.with_penalties(choice.normal_penalty,
+                                                                     choice.shear_penalty)
+            self.choices = choice.text
         self.committed = StepState.initial(self.model)
         self.control = StepControl(self.dt)
         self.advisor = PenaltyAdvisor(self.model, self.dt)

@@ -14,23 +14,42 @@ class JointMaterial:
 
     Parameters
     ----------
-    normal_penalty : float
-        Normal penalty p_n in N/m (per unit thickness), positive.
-    shear_penalty : float
-        Shear penalty p_s in N/m, positive.
+    normal_penalty : float or "auto"
+        Normal penalty p_n in N/m (per unit thickness), positive; ``"auto"``: chosen by the
+        simulation from the scene and its step (:mod:`dda.auto_settings`; ``sim.choices``
+        says what and why).
+    shear_penalty : float or "auto"
+        Shear penalty p_s in N/m, positive; ``"auto"``: the normal penalty.
     friction : FrictionLaw
         The friction law of this joint, for example ``CoulombSingle(phi=30)``.
+
+    Examples
+    --------
+    >>> from dda.contact import CoulombSingle, JointMaterial
+    >>> JointMaterial("auto", "auto", CoulombSingle(phi=30.0)).auto
+    True
     """
 
-    normal_penalty: float
-    shear_penalty: float
+    normal_penalty: float | str
+    shear_penalty: float | str
     friction: FrictionLaw
 
     def __post_init__(self):
-        finite_number("normal_penalty", self.normal_penalty, positive=True, where="JointMaterial")
-        finite_number("shear_penalty", self.shear_penalty, positive=True, where="JointMaterial")
+        for name in ("normal_penalty", "shear_penalty"):
+            value = getattr(self, name)
+            if isinstance(value, str):
+                if value != "auto":
+                    raise ValueError(f"JointMaterial: {name} must be a number (N/m) or "
+                                     f"'auto', got {value!r}")
+                continue
+            finite_number(name, value, positive=True, where="JointMaterial")
         if not isinstance(self.friction, FrictionLaw):
             raise TypeError(
                 "JointMaterial: friction must be a FrictionLaw such as CoulombSingle(phi=30), "
                 f"got {self.friction!r}"
             )
+
+    @property
+    def auto(self) -> bool:
+        """Whether either penalty is left to the simulation ("auto")."""
+        return "auto" in (self.normal_penalty, self.shear_penalty)

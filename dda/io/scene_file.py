@@ -251,6 +251,15 @@ class _Reader:
             raise self.error((*path, key), f"must be positive, got {v!r}")
         return float(v)
 
+    def number_or_auto(self, data, path, key):
+        """A positive number, or the string "auto" (chosen by the simulation)."""
+        if data.get(key) == "auto":
+            return "auto"
+        if isinstance(data.get(key), str):
+            raise self.error((*path, key), f"must be a positive number or \"auto\", got "
+                             f"{data[key]!r}")
+        return self.number(data, path, key, positive=True)
+
     def points(self, data, path, key, count=None):
         if key not in data:
             raise self.error(path, f"needs '{key}'")
@@ -565,8 +574,8 @@ def _joint(r, spec, p, folder, extra=()):
     r.table(spec, p, {"normal_penalty", "shear_penalty", "friction", *extra})
     law = _read_friction(r, spec.get("friction"), (*p, "friction"), folder)
     return r.call(p, JointMaterial,
-                  normal_penalty=r.number(spec, p, "normal_penalty", positive=True),
-                  shear_penalty=r.number(spec, p, "shear_penalty", positive=True),
+                  normal_penalty=r.number_or_auto(spec, p, "normal_penalty"),
+                  shear_penalty=r.number_or_auto(spec, p, "shear_penalty"),
                   friction=law)
 
 
@@ -702,7 +711,7 @@ def _read_simulation(r, data, settings):
     sim = r.table(data.get("simulation", {}), p, {*settings, "duration", "solver",
                                                    *solver_keys})
     solver = _read_solver(r, sim, p, solver_keys)
-    kwargs = {"dt": r.number(sim, p, "dt", positive=True)}
+    kwargs = {"dt": r.number_or_auto(sim, p, "dt")}
     for k in settings:
         if k != "dt" and k in sim:
             kwargs[k] = sim[k]

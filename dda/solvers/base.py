@@ -94,6 +94,8 @@ class NonlinearSolver(ABC):
     """A strategy that solves one time step (DESIGN.md: LegacyPullBack, NewtonRaphson)."""
 
     name = "solver"
+    #: steps per period of the shaking that ``dt="auto"`` takes (:mod:`dda.auto_settings`)
+    auto_steps_per_period = 300
 
     def factors(self) -> FactorSet:
         """The sparse factorizations this solver keeps from step to step (their symbolic

@@ -30,6 +30,8 @@ class LegacyPullBack(NonlinearSolver):
     """
 
     name = "legacy"
+    # explicit friction: the error is first order in dt (dda.auto_settings has the numbers)
+    auto_steps_per_period = 700
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element

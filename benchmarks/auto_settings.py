@@ -1,0 +1,170 @@
+"""``dt="auto"`` and ``"auto"`` penalties against hand-picked settings (issue 20, item 4).
+
+Runs, for both solvers, with the rule of :mod:`dda.auto_settings`:
+
+- the block on a moving base (1 s of 1 g at 2 Hz, ``benchmarks/accuracy_cost.py``'s case):
+  error against the analytical slip, CPU time, and the cheapest hand-picked setting within 1%
+  of ``results/accuracy_cost.csv`` beside it;
+- the rock slope of ``examples/rock_slope.py`` with the face-onset joint, at the tests' length
+  (0.5 s a level, 4 s) and the example's (2 s a level, 16 s): the largest gap to the rigid
+  block until the stopper, CPU time; and the paper's hand-picked penalties (10 GN/m normal,
+  10 MN/m shear) at dt 1e-3 beside them.
+
+``--scan`` also runs the sweeps the rule was set from (the rock slope's error against the
+steps per period N, and the moving base's against N and the penalty's multiple of the
+inertia), which take about 5 minutes.
+
+Each run is its own process (two at a time). Writes ``benchmarks/results/auto_settings.md``.
+
+Run:  python benchmarks/auto_settings.py [--scan]
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+G = 9.81
+
+
+def moving_base_error(solver: str, dt="auto", penalty="auto") -> dict:
+    import dda
+    from dda.contact import CoulombSingle, JointMaterial
+    from dda.registry import make_solver
+    from dda.studies.cases import moving_base, relative_slip
+    from dda.studies.studies import _moving_base_reference
+
+    scene, base, block = moving_base()
+    scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(36.4)))
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver))
+    cpu = time.process_time()
+    result = sim.run(1.0, progress=False)
+    cpu = time.process_time() - cpu
+    times, ref = _moving_base_reference(1.0, 36.4, G, 2.0)
+    slip = relative_slip(result, base, block)
+    error = np.abs(slip - np.interp(result.time, times, ref)).max() / np.abs(ref).max()
+    return {"case": "moving base", "solver": solver, "dt": sim.dt,
+            "penalty": float(sim.model.joints.normal_penalty[0]), "error": float(error),
+            "cpu": cpu, "cuts": len(result.stats.cuts)}
+
+
+def rock_slope_gap(solver: str, hold: float, dt="auto", penalty="auto",
+                   shear=None) -> dict:
+    import dda
+    from dda.contact import JointMaterial, StaticDynamicTransition
+    from dda.registry import make_solver
+    from dda.studies.cases import SLOPE_DIP, SLOPE_STOP, rock_slope, slide_down_dip, stepped_table
+    from dda.studies.references import sliding_block
+
+    table = stepped_table(670.0, 2.0, 8, hold)
+    law = StaticDynamicTransition(40.5, 31.6)
+    scene, lower, upper = rock_slope(law, table)
+    scene.set_joint(JointMaterial(penalty, penalty if shear is None else shear, law))
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver))
+    cpu = time.process_time()
+    result = sim.run(8 * hold, progress=False)
+    cpu = time.process_time() - cpu
+    t = np.asarray(result.time)
+    slide = slide_down_dip(result, lower, upper)
+    slide = slide - slide[0]
+    rigid = sliding_block(table, t, np.tan(np.radians(40.5)), np.tan(np.radians(31.6)),
+                          dip=SLOPE_DIP, breakpoints=table.breakpoints).slip
+    near = np.flatnonzero((slide >= 0.95 * SLOPE_STOP) | (rigid >= 0.95 * SLOPE_STOP))
+    end = near[0] if len(near) else len(t) - 1
+    gap = np.abs(slide[: end + 1] - rigid[: end + 1]).max() / max(rigid[end], 1e-4)
+    return {"case": f"rock slope, {8 * hold:g} s", "solver": solver, "dt": sim.dt,
+            "penalty": float(sim.model.joints.normal_penalty[0]), "error": float(gap),
+            "cpu": cpu, "cuts": len(result.stats.cuts)}
+
+
+def _run(job):
+    kind, args, label = job
+    row = (moving_base_error if kind == "mb" else rock_slope_gap)(*args)
+    row["setting"] = label
+    return row
+
+
+def best_hand_picked(path: Path) -> dict:
+    """The cheapest moving-base run of each solver within 1% in accuracy_cost.csv."""
+    out = {}
+    if not path.exists():
+        return out
+    with open(path) as f:
+        for r in csv.DictReader(f):
+            if r["study"] != "moving_base" or r["status"] != "ok":
+                continue
+            if float(r["error"]) <= 0.01:
+                best = out.get(r["solver"])
+                if best is None or float(r["cpu_time"]) < float(best["cpu_time"]):
+                    out[r["solver"]] = r
+    return out
+
+
+def jobs(scan: bool):
+    todo = []
+    for solver in ("newton", "legacy"):
+        todo.append(("mb", (solver,), "auto"))
+        for hold in (0.5, 2.0):
+            todo.append(("rock", (solver, hold), "auto"))
+            todo.append(("rock", (solver, hold, 1e-3, 1e10, 1e7),
+                         "paper's 10 GN/m, 10 MN/m, dt 1e-3"))
+    if scan:
+        mass = {"mb": 21.56e3 / G * 0.04, "rock": 22.0e3 / G * 0.24 * 0.13}
+        for solver, n, kappa in itertools.product(("newton", "legacy"),
+                                                  (100, 200, 300, 500), (0.3, 1, 3, 10)):
+            dt = 0.5 / n
+            todo.append(("mb", (solver, dt, kappa * 2 * mass["mb"] / dt**2),
+                         f"scan: N {n}, kappa {kappa:g}"))
+        for solver, ns in (("newton", (120, 150, 165, 200, 260, 300, 350)),
+                           ("legacy", (200, 500, 600, 700, 800, 1000))):
+            for n in ns:
+                dt = 0.5 / n
+                todo.append(("rock", (solver, 0.5, dt, 3 * 2 * mass["rock"] / dt**2),
+                             f"scan: N {n}, kappa 3"))
+    return todo
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scan", action="store_true", help="also the sweeps the rule came from")
+    ap.add_argument("--out", default=str(HERE / "results" / "auto_settings.md"))
+    args = ap.parse_args(argv)
+    rows = []
+    with ProcessPoolExecutor(max_workers=2) as pool:
+        for row in pool.map(_run, jobs(args.scan)):
+            rows.append(row)
+            print(_line(row), flush=True)
+    best = best_hand_picked(HERE / "results" / "accuracy_cost.csv")
+    lines = [f"moving base, cheapest hand-picked within 1% (accuracy_cost.csv), {s}: dt "
+             f"{float(r['dt']):g} s, {float(r['penalty']):.0e} N/m, error "
+             f"{100 * float(r['error']):.3f}%, {float(r['cpu_time']):.3f} s CPU"
+             for s, r in best.items()]
+    for line in lines:
+        print(line)
+    head = "| case | solver | setting | dt (s) | penalty (N/m) | error | CPU (s) | cuts |\n"
+    body = "".join(f"| {r['case']} | {r['solver']} | {r['setting']} | {r['dt']:.3g} | "
+                   f"{r['penalty']:.3g} | {100 * r['error']:.3f}% | {r['cpu']:.2f} | "
+                   f"{r['cuts']} |\n" for r in rows)
+    Path(args.out).write_text(
+        "# Auto penalty and dt (`python benchmarks/auto_settings.py"
+        f"{' --scan' if args.scan else ''}`)\n\n" + head + "|---" * 8 + "|\n" + body + "\n"
+        + "".join(f"- {line}\n" for line in lines))
+    print(f"wrote {args.out}")
+    return rows
+
+
+def _line(r) -> str:
+    return (f"{r['case']:18s} {r['solver']:7s} {r['setting']:36s} dt {r['dt']:9.3g} s  "
+            f"p {r['penalty']:9.3g} N/m  error {100 * r['error']:7.3f}%  "
+            f"CPU {r['cpu']:6.2f} s  cuts {r['cuts']}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,234 @@
+"""Choosing the contact penalty and the time step from the scene (``"auto"``).
+
+``JointMaterial(normal_penalty="auto", shear_penalty="auto", ...)`` and
+``Simulation(scene, dt="auto")`` leave the choice to :func:`choose`, which
+:class:`dda.Simulation` calls once, before the first step; ``sim.choices`` (and ``dda info``)
+says what it chose and why. The rule, and the measurements it comes from
+(``benchmarks/auto_settings.py`` runs them again):
+
+1. **The time step resolves the shaking.** ``dt = 1 / (N f)``, with ``f`` the frequency below
+   which 99% of the shaking's spectral energy lies (the acceleration sampled at 1 kHz, or at
+   its record's own spacing, over its first ``PROBE_SECONDS``) and ``N`` the solver's
+   ``auto_steps_per_period``: 300 for the fully implicit method, 700 for legacy DDA. The
+   rock slope of ``examples/rock_slope.py`` (0.5 s a level, 2 Hz, p = 3 x the inertia) set
+   them. Its error is the onset of each slip event, found only at the end of the step in
+   which it happens: the slide lost per event grows with the delay, up to a step, and with
+   dt commensurate with the table's period every event loses alike. Newton's gap to the
+   rigid block was 0.99 / 0.66 / 0.51 / 1.30 / 1.07 / 0.60 / 0.52 / 0.30 / 0.63 / 0.22 /
+   0.22 / 0.11 / 0.11% at N = 120 / 135 / 150 / 165 / 180 / 200 / 250 / 260 / 280 / 300 /
+   320 / 350 / 400 (the same at p = 10 x the inertia), legacy DDA's 4.6 / 2.0 / 1.4 / 1.2 /
+   0.65 / 0.51 / 0.58 / 0.65 / 0.53 / 0.58 / 0.54% at N = 100 / 200 / 300 / 500 / 600 / 650
+   / 700 / 750 / 800 / 900 / 1000 (its friction is explicit, first order in dt). Without
+   shaking (and as a cap with it) a
+   block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /
+   perimeter`` in one step under gravity and the shaking's peak: ``dt = sqrt(2 TARGET_DEPTH
+   h / (g + a_max))``.
+2. **The penalty is three times Newmark's inertia of the lightest free block**,
+   ``p_n = KAPPA 2 m / dt^2`` with ``KAPPA = 3``: stiff enough against the block's own mass
+   that a contact is not a soft spring the block bounces on, soft enough that OPEN-CLOSE
+   settles (the step's matrix is not dominated by the springs, see
+   :mod:`dda.penalty_advice`). On the block on a moving base (``benchmarks/accuracy_cost.py``'s
+   case, 1 s of 1 g at 2 Hz) the error against the analytical slip was, with ``p = KAPPA 2 m /
+   dt^2`` and ``dt = 0.5 s / N``, for legacy DDA:
+
+   =======  ===========  =========  =========  ==========
+   N        kappa 0.3    kappa 1    kappa 3    kappa 10
+   =======  ===========  =========  =========  ==========
+   100      8.9%         1.5%       2.3%       2.9%
+   200      1.5%         0.52%      0.14%      0.64%
+   300      0.96%        0.35%      0.13%      0.17%
+   500      0.29%        0.06%      0.02%      0.03%
+   =======  ===========  =========  =========  ==========
+
+   and for Newton 9.6 / 2.3 / 0.92 / 0.32% at N = 100, 1.7 / 0.60 / 0.20 / 0.11% at N = 200.
+3. **No contact sinks deeper than 1% of its half-width under its load**: the penalty is raised
+   to ``F / (TARGET_DEPTH h)`` where a block's load ``F`` (per vertex contact, two sharing a
+   face) is its weight, the weight of the free blocks above it (each by the share of its
+   width that lies over the block) and its point loads, times ``1 + a_max / g`` under
+   shaking. When that is more than ``KAPPA`` times the inertia and dt is "auto" too, dt is
+   shortened until it is not.
+4. The shear penalty equals the normal one.
+
+A joint with a number keeps it; only "auto" values are chosen, all with the same rule (the
+lightest free block and the most loaded contact of the scene).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from dda.penalty_advice import TARGET_DEPTH
+
+__all__ = ["AutoChoice", "KAPPA", "PROBE_SECONDS", "choose", "shaking_frequency"]
+
+#: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block
+KAPPA = 3.0
+#: how much of a shaking history (s) its frequency is measured over when the run's length
+#: is not known
+PROBE_SECONDS = 20.0
+#: the share of the shaking's spectral energy below the frequency dt resolves
+ENERGY_SHARE = 0.99
+
+
+@dataclass(frozen=True)
+class AutoChoice:
+    """What :func:`choose` chose: the step (s), the penalties (N/m) and why (``text``)."""
+
+    dt: float
+    normal_penalty: float
+    shear_penalty: float
+    text: str
+
+
+def _samples(histories, duration: float | None):
+    """Each history's acceleration sampled at 1 kHz (or its record's finest spacing) from 0
+    to ``duration`` (default: the record's end, at most ``PROBE_SECONDS``): ``(step, a)``
+    pairs, ``a`` of shape (n, 2)."""
+    span = min(duration, PROBE_SECONDS) if duration else PROBE_SECONDS
+    out = []
+    for h in histories:
+        step = min(1e-3, h.min_spacing)
+        t = np.arange(0.0, min(span, h.end_time), step)
+        if len(t) >= 8:
+            out.append((step, h.sample(t)))
+    return out
+
+
+def shaking_frequency(histories, duration: float | None = None) -> float | None:
+    """The frequency (Hz) below which ``ENERGY_SHARE`` of the shaking's spectral energy lies,
+    the highest over ``histories`` (:class:`dda.effects.AccelerationHistory`, both
+    components); None when there is no shaking (or it is constant).
+
+    Each history is sampled at 1 kHz (or at its record's finest spacing) from 0 to
+    ``duration`` (default: the record's end, at most ``PROBE_SECONDS``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dda.effects import AccelerationHistory
+    >>> h = AccelerationHistory(lambda t: (9.81 * np.sin(4 * np.pi * t), 0.0))
+    >>> round(shaking_frequency([h], duration=5.0), 2)
+    2.0
+    """
+    return _frequency(_samples(histories, duration))
+
+
+def _frequency(samples) -> float | None:
+    freq = None
+    for step, a in samples:
+        a = a - a.mean(axis=0)
+        p = (np.abs(np.fft.rfft(a, axis=0)) ** 2).sum(axis=1)
+        if p.sum() <= 0.0:
+            continue
+        f = np.fft.rfftfreq(len(a), step)
+        c = np.cumsum(p) / p.sum()
+        fq = float(f[min(int(np.searchsorted(c, ENERGY_SHARE)), len(f) - 1)])
+        freq = fq if freq is None else max(freq, fq)
+    return freq if freq else None
+
+
+def _block_loads(model, a_max: float) -> np.ndarray:
+    """(n_blocks,) the load per vertex contact under each free block (N per m): its weight, the
+    free blocks above it (by the share of their width over it) and its point loads, times
+    ``1 + a_max / g``, over two contacts."""
+    g = abs(model.gravity or 0.0)
+    n = model.n_blocks
+    x = model.x_initial
+    blk = model.topo.block
+    x0 = np.full(n, np.inf)
+    x1 = np.full(n, -np.inf)
+    np.minimum.at(x0, blk, x[:, 0])
+    np.maximum.at(x1, blk, x[:, 0])
+    yc = model.centroid_initial[:, 1]
+    weight = np.where(model.free, model.density * model.size**2 * g, 0.0)
+    width = np.maximum(x1 - x0, 1e-300)
+    load = weight.copy()
+    free = np.flatnonzero(model.free)
+    # the column above each free block, in chunks of rows (n x n would not fit for 10^4 blocks)
+    for lo in range(0, len(free), 1024):
+        i = free[lo:lo + 1024, None]
+        j = free[None, :]
+        over = np.clip(np.minimum(x1[i], x1[j]) - np.maximum(x0[i], x0[j]), 0.0, None)
+        above = yc[j] > yc[i]
+        load[free[lo:lo + 1024]] += ((over / width[j]) * above * weight[j]).sum(axis=1)
+    if len(model.load_block):
+        np.add.at(load, model.load_block, np.hypot(*model.load_constant.T))
+    factor = 1.0 + (a_max / g if g > 0.0 else 0.0)
+    return 0.5 * load * factor
+
+
+def choose(model, solver, dt: float | None, shakes=(), duration: float | None = None,
+           auto_penalty: bool = True) -> AutoChoice:
+    """Choose dt (when ``dt`` is None) and the penalty (module docstring) for ``model``.
+
+    Parameters
+    ----------
+    model : dda.model.Model
+    solver : the solver (its ``auto_steps_per_period``)
+    dt : the step asked for, or None to choose it
+    shakes : the scene's shaking histories (:class:`dda.effects.AccelerationHistory`)
+    duration : the run's length when known (the shaking is measured over it)
+    auto_penalty : whether any joint's penalty is "auto" (else only dt is chosen)
+    """
+    lines = []
+    free = model.free
+    if not free.any():
+        raise ValueError("auto settings: the scene has no free block to choose them for")
+    mass = np.where(free, model.density * model.size**2, np.inf)
+    light = int(np.argmin(mass))
+    m = float(mass[light])
+    h = model.thickness
+    g = abs(model.gravity or 0.0)
+    samples = _samples(shakes, duration)
+    a_max = max((float(np.hypot(a[:, 0], a[:, 1]).max()) for _, a in samples), default=0.0)
+    name = model.block_label(light)
+    steps = int(getattr(solver, "auto_steps_per_period", 300))
+    if dt is None:
+        f = _frequency(samples)
+        h_min = float(np.min(h[free]))
+        drive = g + a_max
+        dt_move = np.sqrt(2.0 * TARGET_DEPTH * h_min / drive) if drive > 0.0 else np.inf
+        if f is not None:
+            dt_shake = 1.0 / (steps * f)
+            lines.append(f"dt: {steps} steps (the solver's auto_steps_per_period) per period "
+                         f"of the shaking's {f:.3g} Hz (below which {100 * ENERGY_SHARE:g}% of "
+                         f"its spectral energy lies): {dt_shake:.3g} s")
+        else:
+            dt_shake = np.inf
+        if dt_move < dt_shake:
+            lines.append(f"dt: a block starting from rest moves at most {100 * TARGET_DEPTH:g}% "
+                         f"of the thinnest free block's half-width ({h_min:.3g} m) in a step "
+                         f"under {'gravity and the shaking' if a_max else 'gravity'}: "
+                         f"{dt_move:.3g} s")
+        dt = float(min(dt_shake, dt_move))
+        if not np.isfinite(dt):
+            raise ValueError("auto settings: nothing in the scene sets a time scale (no "
+                             "gravity, no shaking); give dt")
+        auto_dt = True
+    else:
+        auto_dt = False
+    if not auto_penalty:
+        return AutoChoice(dt, np.nan, np.nan, "\n".join(lines))
+    inertia = 2.0 * m / dt**2
+    pn = KAPPA * inertia
+    reason = (f"normal penalty: {KAPPA:g} x Newmark's inertia 2 m / dt^2 = {inertia:.3g} N/m "
+              f"of the lightest free block ({name}, {m:.3g} kg/m): {pn:.3g} N/m")
+    loads = _block_loads(model, a_max)
+    need = np.where(free, loads / (TARGET_DEPTH * h), 0.0)
+    worst = int(np.argmax(need))
+    if need[worst] > pn:
+        who = model.block_label(worst)
+        pn = float(need[worst])
+        reason = (f"normal penalty: {pn:.3g} N/m keeps the load under {who} ({loads[worst]:.3g} "
+                  f"N/m per contact{', with the shaking' if a_max else ''}) within "
+                  f"{100 * TARGET_DEPTH:g}% of its half-width ({h[worst]:.3g} m); "
+                  f"{KAPPA:g} x the inertia 2 m / dt^2 of the lightest block would be "
+                  f"{KAPPA * inertia:.3g} N/m")
+        if auto_dt:
+            dt = float(np.sqrt(KAPPA * 2.0 * m / pn))
+            reason += f"; dt shortened to {dt:.3g} s to keep it at {KAPPA:g} x the inertia"
+    lines.append(reason)
+    lines.append("shear penalty: the normal penalty")
+    return AutoChoice(dt, pn, pn, "\n".join(lines))

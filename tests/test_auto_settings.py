@@ -1,0 +1,136 @@
+"""``"auto"`` penalties and dt (dda.auto_settings): what the rule chooses, and its text."""
+
+import numpy as np
+import pytest
+
+import dda
+from dda.auto_settings import KAPPA, shaking_frequency
+from dda.contact import CoulombSingle, JointMaterial
+from dda.effects import AccelerationHistory
+from dda.materials import LinearElastic
+from dda.penalty_advice import SOFT_DEPTH, TARGET_DEPTH
+from dda.solvers import LegacyPullBack, NewtonRaphson
+
+ROCK = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
+G = 9.81
+
+
+def column(n, joint=None, shake=None):
+    """n unit squares stacked on a fixed base."""
+    scene = dda.Scene(gravity=G)
+    base = scene.add_block([(-1, -1), (2, -1), (2, 0), (-1, 0)], ROCK, fixed=True, name="base")
+    for i in range(n):
+        scene.add_block([(0, i), (1, i), (1, i + 1), (0, i + 1)], ROCK, name=f"b{i}")
+    scene.set_joint(joint or JointMaterial("auto", "auto", CoulombSingle(phi=35.0)))
+    if shake is not None:
+        scene.shake(base, acceleration=shake)
+    return scene
+
+
+MASS = 2600.0  # kg per m, a unit square
+HALF_WIDTH = 0.5  # 2 area / perimeter of a unit square
+
+
+def test_a_joint_takes_auto_and_names_other_strings():
+    assert JointMaterial("auto", 1e9, CoulombSingle(phi=30.0)).auto
+    assert not JointMaterial(1e9, 1e9, CoulombSingle(phi=30.0)).auto
+    with pytest.raises(ValueError, match="normal_penalty must be a number .* or 'auto', got "
+                                         "'automatic'"):
+        JointMaterial("automatic", 1e9, CoulombSingle(phi=30.0))
+    with pytest.raises(ValueError, match="dt must be a number .* or 'auto', got 'fast'"):
+        dda.Simulation(column(1), dt="fast")
+
+
+def test_a_given_dt_gets_three_times_the_inertia_of_the_lightest_block():
+    sim = dda.Simulation(column(1), dt=1e-3)
+    inertia = 2 * MASS / 1e-6
+    assert sim.dt == 1e-3
+    np.testing.assert_allclose(sim.model.joints.normal_penalty, KAPPA * inertia, rtol=1e-12)
+    np.testing.assert_allclose(sim.model.joints.shear_penalty, KAPPA * inertia, rtol=1e-12)
+    assert "3 x Newmark's inertia" in sim.choices and "block 'b0'" in sim.choices
+    assert "dt:" not in sim.choices  # dt was given
+
+
+def test_without_shaking_dt_lets_a_block_fall_one_percent_of_its_half_width():
+    sim = dda.Simulation(column(1), dt="auto")
+    dt = np.sqrt(2 * TARGET_DEPTH * HALF_WIDTH / G)
+    assert sim.dt == pytest.approx(dt, rel=1e-12)
+    # the block comes to rest on its two springs, each sunk by half its weight over the
+    # penalty: h / 600 (3 x 2 m / dt^2 with dt^2 = 0.02 h / g), 0.17% of its half-width
+    p = sim.model.joints.normal_penalty[0]
+    result = sim.run(40 * sim.dt, progress=False)
+    sunk = result.stats["spring_penetration"]
+    assert sunk[-1] == pytest.approx(0.5 * MASS * G / p, rel=1e-3)
+    assert sunk[-1] == pytest.approx(HALF_WIDTH / 600.0, rel=1e-3)
+
+
+def test_a_tall_column_raises_the_penalty_to_hold_its_load():
+    """Ten blocks on one: the bottom block's two contacts carry 10 blocks' weight."""
+    n = 10
+    need = 0.5 * n * MASS * G / (TARGET_DEPTH * HALF_WIDTH)
+    sim = dda.Simulation(column(n), dt=0.05)  # a long step: a soft penalty by the inertia
+    assert KAPPA * 2 * MASS / 0.05**2 < need
+    np.testing.assert_allclose(sim.model.joints.normal_penalty, need, rtol=1e-9)
+    assert "keeps the load under block 'b0'" in sim.choices
+    auto = dda.Simulation(column(n), dt="auto")  # dt shortened to keep the penalty at 3 x
+    assert auto.dt == pytest.approx(np.sqrt(KAPPA * 2 * MASS / need), rel=1e-9)
+    assert "dt shortened" in auto.choices
+    # the column settles with its bottom contacts at 1% of the half-width (5 mm), its top
+    # 27.63 mm down: the ten joints' depths (10 + 9 + ... + 1 half-weights over the penalty,
+    # 27.5 mm) and the blocks' own strain (each block under the weight above its middle,
+    # (k - 1/2) W / E, 0.13 mm); the swing of the settling stays below the 5% at which the
+    # penalty advice warns
+    result = auto.run(300 * auto.dt, progress=False)
+    sunk = result.stats["spring_penetration"]
+    assert sunk[-1] == pytest.approx(TARGET_DEPTH * HALF_WIDTH, rel=1e-3)
+    assert sunk.max() < SOFT_DEPTH * HALF_WIDTH
+    weight = MASS * G
+    strain = sum(k - 0.5 for k in range(1, n + 1)) * weight / ROCK.young
+    assert result.displacement(n)[-1, 1] == pytest.approx(-55 * 0.5 * weight / need - strain,
+                                                          rel=1e-3)
+
+
+@pytest.mark.parametrize("solver, steps", [(NewtonRaphson(), 300), (LegacyPullBack(), 700)])
+def test_dt_resolves_the_shaking_by_the_solver(solver, steps):
+    shake = lambda t: (0.3 * G * np.sin(2 * np.pi * 5.0 * t), 0.0)  # noqa: E731
+    sim = dda.Simulation(column(1, shake=shake), dt="auto", solver=solver)
+    assert sim.dt == pytest.approx(1.0 / (steps * 5.0), rel=0.01)
+    assert f"{steps} steps" in sim.choices and "5 Hz" in sim.choices
+
+
+def test_the_shaking_frequency_of_records_and_callables():
+    t = np.arange(0.0, 10.0, 0.005)
+    record = AccelerationHistory(np.sin(2 * np.pi * 3.0 * t), t)
+    assert shaking_frequency([record]) == pytest.approx(3.0, abs=0.1)
+    two = AccelerationHistory(lambda s: (np.sin(2 * np.pi * 2.0 * s),
+                                         0.5 * np.sin(2 * np.pi * 8.0 * s)))
+    assert shaking_frequency([two], duration=10.0) == pytest.approx(8.0, abs=0.1)
+    assert shaking_frequency([]) is None
+    assert shaking_frequency([AccelerationHistory(lambda s: (1.0, 0.0))]) is None
+
+
+def test_a_given_penalty_stays_and_a_lone_auto_shear_follows_it():
+    sim = dda.Simulation(column(1, JointMaterial(2e9, "auto", CoulombSingle(phi=35.0))),
+                         dt=1e-3)
+    assert sim.model.joints.normal_penalty.tolist() == [2e9]
+    assert sim.model.joints.shear_penalty.tolist() == [2e9]
+    given = dda.Simulation(column(1, JointMaterial(2e9, 1e8, CoulombSingle(phi=35.0))),
+                           dt=1e-3)
+    assert given.choices == ""
+    assert given.model.joints.shear_penalty.tolist() == [1e8]
+
+
+def test_nothing_sets_a_time_scale_without_gravity_or_shaking():
+    scene = dda.Scene()
+    scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], ROCK)
+    with pytest.raises(ValueError, match="nothing in the scene sets a time scale"):
+        dda.Simulation(scene, dt="auto")
+
+
+def test_a_solver_of_ones_own_says_how_many_steps_a_period():
+    class Careful(NewtonRaphson):
+        auto_steps_per_period = 1000
+
+    shake = lambda t: (0.3 * G * np.sin(2 * np.pi * 5.0 * t), 0.0)  # noqa: E731
+    sim = dda.Simulation(column(1, shake=shake), dt="auto", solver=Careful())
+    assert sim.dt == pytest.approx(1.0 / 5000.0, rel=0.01)
