@@ -134,3 +134,54 @@ def test_a_solver_of_ones_own_says_how_many_steps_a_period():
     shake = lambda t: (0.3 * G * np.sin(2 * np.pi * 5.0 * t), 0.0)  # noqa: E731
     sim = dda.Simulation(column(1, shake=shake), dt="auto", solver=Careful())
     assert sim.dt == pytest.approx(1.0 / 5000.0, rel=0.01)
+
+
+SCENE = """
+[scene]
+gravity = 9.81
+
+[simulation]
+dt = "auto"
+duration = 0.1
+
+[materials.rock]
+young = 10e9
+poisson = 0.25
+density = 2600.0
+
+[joints.default]
+normal_penalty = "auto"
+shear_penalty = "auto"
+friction = { law = "coulomb", phi = 35.0 }
+
+[[blocks]]
+name = "base"
+material = "rock"
+vertices = [[0, 0], [4, 0], [4, 1], [0, 1]]
+fixed = true
+
+[[blocks]]
+name = "top"
+material = "rock"
+vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]
+"""
+
+
+def test_scene_files_take_auto_and_dda_info_says_what_it_chose(tmp_path, capsys):
+    from dda.cli import describe, main
+    from dda.io.scene_file import SceneFileError, load_scene
+
+    path = tmp_path / "auto.toml"
+    path.write_text(SCENE)
+    loaded = load_scene(path)
+    sim = loaded.simulation()
+    assert sim.dt == pytest.approx(np.sqrt(2 * TARGET_DEPTH * HALF_WIDTH / G), rel=1e-12)
+    info = describe(loaded)
+    assert "auto       dt: a block starting from rest moves at most 1%" in info
+    assert "normal penalty: 3 x Newmark's inertia" in info
+    assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+    assert "  auto: shear penalty: the normal penalty" in capsys.readouterr().out
+    path.write_text(SCENE.replace('normal_penalty = "auto"', 'normal_penalty = "stiff"'))
+    with pytest.raises(SceneFileError, match='normal_penalty: must be a positive number or '
+                                             '"auto", got \'stiff\''):
+        load_scene(path)
