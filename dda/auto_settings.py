@@ -56,6 +56,12 @@ says what it chose and why. The rule, and the measurements it comes from
 
 A joint with a number keeps it; only "auto" values are chosen, all with the same rule (the
 lightest free block and the most loaded contact of the scene).
+
+A limit met on the cut slope of ``examples/jointed_slope.py``: the rule's 2.2e9 N/m (legacy
+DDA, dt 7.1e-4) lets the slope's blocks sink a few tenths of a millimetre into each other where
+their corners meet on continuous joints, and detection does not yet hold every such corner on
+the face it sinks through; the penetration guard stops the run at 0.09 s with an edge of one
+block 9 mm inside another. The example keeps its 5e10 N/m.
 """
 
 from __future__ import annotations

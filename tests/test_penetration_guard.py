@@ -232,3 +232,51 @@ def test_compiled_untracked_depth_is_the_numpy_one():
                          np.concatenate([spring, spring]), np.maximum)
     np.testing.assert_array_equal(untracked_depth(pen, c, p_n, topo),
                                   pen.depth - np.maximum(held_own, held_mirror))
+
+
+def test_an_edge_between_two_corners_on_the_sides_is_tracked_by_their_springs():
+    """Two unit squares corner on corner, the upper 3 mm into the lower: its corners lie on
+    the lower block's side lines (no distance inside it), only its bottom edge is inside."""
+    from dda.contact.penetration import edge_penetrations, untracked_edge_depth
+
+    x, topo = stack([box(0, 0, 1, 1), box(0, 0.997, 1, 1)])
+    assert len(vertex_penetrations(x, topo, min_depth=1e-9)) == 0
+    pen = edge_penetrations(x, topo, min_depth=1e-9)
+    lower = pen.select(pen.vertex == 4)  # the upper block's bottom edge, in the lower one
+    assert lower.depth.tolist() == pytest.approx([0.003])
+    pn = 1e9
+    none = contacts([], [], [], [], [], [])
+    assert untracked_edge_depth(lower, none, np.zeros(0), topo) == pytest.approx([0.003])
+    # its two corners on the lower block's top edge (edge 2), each spring 3 mm deep: held
+    held = contacts([4, 5], [2, 2], [1, 1], [0, 0], [STICK, STICK], [-0.003 * pn] * 2)
+    assert untracked_edge_depth(lower, held, np.full(2, pn), topo) == pytest.approx([0.0])
+    # one corner's spring only 1 mm deep, the other's 3 mm: the edge is held by the deeper
+    one = contacts([4, 5], [2, 2], [1, 1], [0, 0], [OPEN, STICK], [0.0, -0.003 * pn])
+    assert untracked_edge_depth(lower, one, np.full(2, pn), topo) == pytest.approx([0.0])
+    # the lower block's corners on the upper block's bottom edge (edge 4) hold it too
+    mirror = contacts([2, 3], [4, 4], [0, 0], [1, 1], [STICK, STICK], [-0.003 * pn] * 2)
+    assert untracked_edge_depth(lower, mirror, np.full(2, pn), topo) == pytest.approx([0.0])
+    # springs only 1 mm deep: 2 mm untracked
+    shallow = contacts([4, 5], [2, 2], [1, 1], [0, 0], [STICK, STICK], [-0.001 * pn] * 2)
+    assert untracked_edge_depth(lower, shallow, np.full(2, pn), topo) == pytest.approx([0.002])
+
+
+def test_the_guard_stops_a_column_whose_contacts_are_lost(monkeypatch):
+    """Before detection kept closed contacts, a column of unit squares on soft springs lost
+    them and its blocks fell through each other, their corners on the side lines where the
+    guard saw them at depth zero. With the contacts lost on purpose the guard now stops it."""
+    import dda.step as step
+
+    monkeypatch.setattr(step, "keep_closed", lambda cand, *args: cand)
+    scene = dda.Scene(gravity=9.81)
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
+    scene.add_block([(-1, -1), (2, -1), (2, 0), (-1, 0)], rock, fixed=True, name="base")
+    for i in range(3):
+        scene.add_block([(0, i), (1, i), (1, i + 1), (0, i + 1)], rock, name=f"b{i}")
+    scene.set_joint(JointMaterial(2.55e7, 2.55e7, CoulombSingle(phi=35.0)))
+    sim = dda.Simulation(scene, dt=0.005)
+    with pytest.raises(dda.SimulationError, match=r"untracked penetration: the edge from "
+                                                  r"vertex \d to \d of block 'b\d' .* is "
+                                                  r"0.00\d+ m inside block 'b\d'"):
+        sim.run(0.3, progress=False)
+    assert sim.committed.time < 0.1  # stopped at the first sinking, not metres later

@@ -253,23 +253,28 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
     fell through (``tests/stability/test_hard_cases.py``). A contact is not added back when
     its vertex has a candidate against the same block (it moved on to another edge, which
     :func:`dda.contact.contacts.carry_over` follows) or when the corner at either end of its
-    edge has a candidate against the vertex's block (the mirrored vertex-vertex pair that the
-    narrow phase kept instead).
+    edge has a candidate against an edge at the vertex (the mirrored vertex-vertex pair that
+    the narrow phase kept instead).
     """
     if len(closed_vertex) == 0:
         return cand
     blk = topo.block
-    old_k = blk[closed_edge]
-    mine = np.isin(closed_vertex * n_blocks + old_k, cand.vertex * n_blocks + cand.bk)
-    corner_keys = cand.vertex * n_blocks + cand.bk
-    j = blk[closed_vertex]
-    mirrored = (np.isin(closed_edge * n_blocks + j, corner_keys)
-                | np.isin(topo.nxt[closed_edge] * n_blocks + j, corner_keys))
-    lost = np.flatnonzero(~mine & ~mirrored)
+    lost = _lost_closed(np.asarray(cand.vertex, dtype=np.int64),
+                        np.asarray(cand.edge, dtype=np.int64),
+                        np.asarray(cand.bk, dtype=np.int64),
+                        np.asarray(closed_vertex, dtype=np.int64),
+                        np.asarray(closed_edge, dtype=np.int64), blk, topo.nxt, topo.prv,
+                        n_blocks, len(x))
     if len(lost) == 0:
         return cand
+    old_k = blk[closed_edge]
     frame = contact_geometry(x, closed_vertex[lost], closed_edge[lost], topo.nxt)
-    keep = ((frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL)
+    # over the edge, or past its end by no more than it is deep behind the edge's line (a
+    # corner on a corner: both sink together, the foot drifts past the end by round-off and
+    # strain) plus the search distance
+    over = (frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL)
+    past = np.maximum(-frame.xi, frame.xi - 1.0) * frame.length
+    keep = ((over | (past <= search_distance + np.maximum(-frame.gap, 0.0)))
             & (frame.gap <= search_distance) & (frame.gap >= -penetration_limit))
     if not keep.any():
         return cand
@@ -287,6 +292,34 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
                                      for name in ContactGeometry.__dataclass_fields__))
     return CandidateContacts(vertex=vertex[order], edge=edge[order], bj=blk[vertex[order]],
                              bk=bk[order], pairs=cand.pairs, geometry=geometry)
+
+
+@njit(cache=True)
+def _lost_closed(cand_vertex, cand_edge, cand_block, closed_vertex, closed_edge, block, nxt,
+                 prv, n_blocks, n_vertices):
+    """Indices of the closed contacts :func:`keep_closed` may add back: their vertex has no
+    candidate against the edge's block, and neither end of their edge has one against either
+    edge at the vertex (its mirror)."""
+    keys = np.sort(cand_vertex * n_blocks + cand_block)
+    pair_keys = np.sort(cand_vertex * n_vertices + cand_edge)
+    n = closed_vertex.shape[0]
+    out = np.empty(n, dtype=np.int64)
+    count = 0
+    for i in range(n):
+        v, e = closed_vertex[i], closed_edge[i]
+        k = block[e]
+        at = np.searchsorted(keys, v * n_blocks + k)
+        found = at < keys.shape[0] and keys[at] == v * n_blocks + k
+        for q in (e, nxt[e]):
+            for f in (v, prv[v]):  # the edges of the vertex's block that end at it
+                if not found:
+                    key = q * n_vertices + f
+                    at = np.searchsorted(pair_keys, key)
+                    found = at < pair_keys.shape[0] and pair_keys[at] == key
+        if not found:
+            out[count] = i
+            count += 1
+    return out[:count].copy()
 
 
 def _empty_candidates(pairs: int) -> CandidateContacts:
@@ -741,6 +774,43 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth):
                 if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
                     continue
                 if not corner[v]:
+                    continue
+                inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
+                if inside and depth > min_depth:
+                    out_v[n_out] = v
+                    out_k[n_out] = k
+                    out_d[n_out] = depth
+                    out_e[n_out] = near
+                    n_out += 1
+    return out_v[:n_out].copy(), out_k[:n_out].copy(), out_d[:n_out].copy(), out_e[:n_out].copy()
+
+
+@njit(cache=True)
+def _midpoints_inside_kernel(x, offsets, nxt, pairs, boxes, min_depth):
+    """Every edge of one block of a pair whose midpoint lies inside the other block deeper
+    than ``min_depth``: edge (its start vertex), block, depth and nearest edge, in the order of
+    :func:`_corners_inside_kernel` (the guard's :func:`dda.contact.penetration.
+    edge_penetrations`)."""
+    n_pairs = pairs.shape[0]
+    cap = 0
+    for q in range(n_pairs):
+        for s in range(2):
+            cap += offsets[pairs[q, s] + 1] - offsets[pairs[q, s]]
+    out_v = np.empty(cap, dtype=np.int64)
+    out_k = np.empty(cap, dtype=np.int64)
+    out_d = np.empty(cap)
+    out_e = np.empty(cap, dtype=np.int64)
+    n_out = 0
+    for s in range(2):
+        for q in range(n_pairs):
+            j = pairs[q, s]
+            k = pairs[q, 1 - s]
+            xmin, ymin, xmax, ymax = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
+            for v in range(offsets[j], offsets[j + 1]):
+                w = nxt[v]
+                px = 0.5 * (x[v, 0] + x[w, 0])
+                py = 0.5 * (x[v, 1] + x[w, 1])
+                if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
                     continue
                 inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
                 if inside and depth > min_depth:

@@ -7,7 +7,10 @@ for every vertex of every block, whether it lies inside another block and how de
     depth(P, k) = min over the edges e of block k of dist(P, segment e),   P inside k
 
 with "inside" decided by the crossing number of a ray from P (even-odd rule, so non-convex
-blocks are handled exactly). A vertex inside another block is *tracked* when a closed contact
+blocks are handled exactly). The midpoint of every edge is probed the same way: where blocks
+stand corner on corner, a corner that sinks into the block below does so along that block's
+side-face line, on its boundary, at depth zero, and only the edge between two such corners is
+inside (:func:`edge_penetrations`). A vertex inside another block is *tracked* when a closed contact
 of that vertex (or, for a vertex-vertex contact, of the vertex at the end of the contacted
 edge) against that block carries a spring penetration ``-t_n / p_n`` at least as deep, give or
 take the tolerance; anything else is an untracked penetration, which the simulation refuses.
@@ -26,12 +29,14 @@ from dda.contact.contacts import OPEN
 from dda.contact.detection import (
     VertexTopology,
     _corners_inside_kernel,
+    _midpoints_inside_kernel,
     bounding_boxes,
     broad_phase,
 )
 
 __all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
-           "untracked_depth", "untracked_penetrations"]
+           "edge_penetrations", "untracked_depth", "untracked_edge_depth",
+           "untracked_penetrations"]
 
 
 @dataclass
@@ -62,7 +67,7 @@ def _empty() -> Penetrations:
 
 
 def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 0.0,
-                        pairs: np.ndarray | None = None) -> Penetrations:
+                        pairs: np.ndarray | None = None, boxes=None) -> Penetrations:
     """Every corner of ``x`` that lies inside another block deeper than ``min_depth`` (m).
 
     A vertex between collinear edges is not a corner and is left out (as contact detection
@@ -88,7 +93,8 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
     offsets = topo.offsets
     if len(offsets) < 3:
         return _empty()
-    boxes = bounding_boxes(x, offsets)
+    if boxes is None:
+        boxes = bounding_boxes(x, offsets)
     if pairs is None:
         pairs = broad_phase(boxes, 0.0)
     if len(pairs) == 0:
@@ -101,6 +107,68 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
         x, offsets, topo.nxt, np.ascontiguousarray(pairs, dtype=np.int64), boxes, corner,
         float(min_depth))
     return Penetrations(vertex, kblock, depth, nearest)
+
+
+def edge_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 0.0,
+                      pairs: np.ndarray | None = None, boxes=None) -> Penetrations:
+    """Every edge of ``x`` whose midpoint lies inside another block deeper than ``min_depth``
+    (m): ``vertex`` is the edge's start vertex (the edge runs to ``topo.nxt[vertex]``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from dda.contact.detection import VertexTopology
+    >>> x = np.array([[0, 0], [1, 0], [1, 1], [0, 1],              # a unit square and one
+    ...               [0, 0.997], [1, 0.997], [1, 2], [0, 2]], float)  # 3 mm into it, aligned
+    >>> topo = VertexTopology.from_offsets(np.array([0, 4, 8]))
+    >>> len(vertex_penetrations(x, topo, min_depth=1e-9))  # its corners are on the sides
+    0
+    >>> pen = edge_penetrations(x, topo, min_depth=1e-9)
+    >>> pen.vertex.tolist(), pen.block.tolist(), np.round(pen.depth, 12).tolist()
+    ([2, 4], [1, 0], [0.003, 0.003])
+    """
+    offsets = topo.offsets
+    if len(offsets) < 3:
+        return _empty()
+    if boxes is None:
+        boxes = bounding_boxes(x, offsets)
+    if pairs is None:
+        pairs = broad_phase(boxes, 0.0)
+    if len(pairs) == 0:
+        return _empty()
+    x = np.ascontiguousarray(x, dtype=np.float64)
+    edge, kblock, depth, nearest = _midpoints_inside_kernel(
+        x, offsets, topo.nxt, np.ascontiguousarray(pairs, dtype=np.int64), boxes,
+        float(min_depth))
+    return Penetrations(edge, kblock, depth, nearest)
+
+
+def untracked_edge_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
+                         topo: VertexTopology) -> np.ndarray:
+    """(len(pen),) how much deeper each edge midpoint of :func:`edge_penetrations` is inside
+    its block k than the springs that hold the edge there.
+
+    A straight edge is held by its two end vertices' springs against k
+    (:func:`untracked_depth`) and by the springs of k's vertices on the edge; between them
+    it is no deeper than the deepest of those, so the midpoint's depth less that deepest
+    spring is what no contact accounts for.
+    """
+    if len(pen) == 0:
+        return np.zeros(0)
+    zero = np.zeros(len(pen))
+    ends = [Penetrations(v, pen.block, zero, pen.edge) for v in (pen.vertex,
+                                                                  topo.nxt[pen.vertex])]
+    held = np.maximum(*(-untracked_depth(e, contacts, normal_penalty, topo) for e in ends))
+    c = contacts
+    closed = np.flatnonzero(c.state != OPEN)
+    if len(closed):
+        nb = len(topo.offsets)
+        # k's vertices in contact with the edge: key (edge, the vertex's block)
+        keys = np.asarray(c.edge[closed] * nb + c.bj[closed], dtype=np.int64)
+        spring = -c.t_n[closed] / normal_penalty[closed]
+        want = np.asarray(pen.vertex * nb + pen.block, dtype=np.int64)
+        held = np.maximum(held, _gather_kernel(keys, np.ascontiguousarray(spring), want, True))
+    return pen.depth - held
 
 
 def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
@@ -267,24 +335,50 @@ def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
     """
     if model.n_blocks < 2:
         return GuardReport()
-    pen = vertex_penetrations(x_new, model.topo, pairs=pairs)
+    topo = model.topo
+    boxes = bounding_boxes(x_new, topo.offsets)
+    pen = vertex_penetrations(x_new, topo, pairs=pairs, boxes=boxes)
+    # an edge shallower than a quarter of the smallest tolerance is untracked by less than
+    # that: below the half tolerance at which the step control calls a penetration already
+    # there at a step's start (resting contacts sink far less; they cost no edge check)
+    edges = edge_penetrations(x_new, topo, 0.25 * tolerance * float(np.min(model.thickness)),
+                              pairs, boxes)
     closed = contacts.state != OPEN
     spring = float(np.maximum.reduce(-contacts.t_n[closed] / normal_penalty[closed],
                                       initial=0.0))
-    if len(pen) == 0:
-        return GuardReport("", pen.deepest, spring)
-    tol = tolerance * np.minimum(model.thickness[model.topo.block[pen.vertex]],
-                                 model.thickness[pen.block])
-    ratio = untracked_depth(pen, contacts, normal_penalty, model.topo) / tol
-    untracked = float(ratio.max())
-    if not (ratio > 1.0).any():
-        return GuardReport("", pen.deepest, spring, untracked)
-    i = int(np.argmax(ratio))
-    v = int(pen.vertex[i])
-    j = int(model.topo.block[v])
+    deepest = max(pen.deepest, edges.deepest)
+    if len(pen) == 0 and len(edges) == 0:
+        return GuardReport("", deepest, spring)
+
+    def tolerances(p):
+        return tolerance * np.minimum(model.thickness[topo.block[p.vertex]],
+                                      model.thickness[p.block])
+
+    tol = tolerances(pen)
+    ratio = untracked_depth(pen, contacts, normal_penalty, topo) / tol
+    worst, worst_e = float(ratio.max(initial=-np.inf)), -np.inf
+    if len(edges):
+        tol_e = tolerances(edges)
+        ratio_e = untracked_edge_depth(edges, contacts, normal_penalty, topo) / tol_e
+        worst_e = float(ratio_e.max())
+    untracked = max(worst, worst_e)
+    if not untracked > 1.0:
+        return GuardReport("", deepest, spring, untracked)
+    on_edge = worst_e > worst
+    p, r, t = (edges, ratio_e, tol_e) if on_edge else (pen, ratio, tol)
+    i = int(np.argmax(r))
+    v = int(p.vertex[i])
+    j = int(topo.block[v])
     local = v - int(model.offsets[j])
-    reason = (f"untracked penetration: vertex {local} of {model.block_label(j)} "
-              f"(at {x_new[v, 0]:.6g}, {x_new[v, 1]:.6g}) is {pen.depth[i]:.3g} m inside "
-              f"{model.block_label(pen.block[i])}, and no closed contact holds it "
-              f"(tolerance {tol[i]:.3g} m)")
-    return GuardReport(reason, pen.deepest, spring, untracked)
+    if on_edge:
+        w = int(topo.nxt[v])
+        mid = 0.5 * (x_new[v] + x_new[w])
+        what = (f"the edge from vertex {local} to {w - int(model.offsets[j])} of "
+                f"{model.block_label(j)} (its midpoint at {mid[0]:.6g}, {mid[1]:.6g})")
+    else:
+        what = (f"vertex {local} of {model.block_label(j)} (at {x_new[v, 0]:.6g}, "
+                f"{x_new[v, 1]:.6g})")
+    reason = (f"untracked penetration: {what} is {p.depth[i]:.3g} m inside "
+              f"{model.block_label(p.block[i])}, and no closed contact holds it "
+              f"(tolerance {t[i]:.3g} m)")
+    return GuardReport(reason, deepest, spring, untracked)

@@ -55,7 +55,17 @@ def test_impact_matrix(name, penalty, dt, solver):
 @pytest.mark.parametrize("dt", DTS)
 @pytest.mark.parametrize("penalty", ["E/1e4", "E", "1000 E"])
 @pytest.mark.parametrize("name", CONCAVE)
-def test_impacts_into_concave_corners(name, penalty, dt, solver):
+def test_impacts_into_concave_corners(name, penalty, dt, solver, request):
+    if (name, penalty, dt) == ("low stopper", "E/1e4", 1e-2):
+        # the guard's edge probes (issue 20's session) see what the vertex guard did not:
+        # the block tips over the stopper's top corner and its bottom-right corner region
+        # hooks into the stopper's (its corner 4 mm past the stopper's side face, the
+        # stopper's corner 0.4 mm past the block's side face, each held by that face), while
+        # its bottom face crosses the stopper's top 23 mm deep over 12 cm, which no
+        # vertex-edge pair holds; the run now stops there instead of finishing through it
+        request.applymarker(pytest.mark.xfail(
+            strict=True, raises=dda.SimulationError,
+            reason="edge-edge overlap of two hooked corners: no vertex-edge contact holds it"))
     w, _ = run_impact(name, PENALTIES[penalty], dt, solver)
     assert_no_energy_gain(w)
     assert_tracked(w)
