@@ -60,7 +60,13 @@ def rock_slope_gap(solver: str, hold: float, dt="auto", penalty="auto",
     import dda
     from dda.contact import JointMaterial, StaticDynamicTransition
     from dda.registry import make_solver
-    from dda.studies.cases import SLOPE_DIP, SLOPE_STOP, rock_slope, slide_down_dip, stepped_table
+    from dda.studies.cases import (
+        SLOPE_DIP,
+        gap_until_stopper,
+        rock_slope,
+        slide_down_dip,
+        stepped_table,
+    )
     from dda.studies.references import sliding_block
 
     table = stepped_table(670.0, 2.0, 8, hold)
@@ -76,9 +82,7 @@ def rock_slope_gap(solver: str, hold: float, dt="auto", penalty="auto",
     slide = slide - slide[0]
     rigid = sliding_block(table, t, np.tan(np.radians(40.5)), np.tan(np.radians(31.6)),
                           dip=SLOPE_DIP, breakpoints=table.breakpoints).slip
-    near = np.flatnonzero((slide >= 0.95 * SLOPE_STOP) | (rigid >= 0.95 * SLOPE_STOP))
-    end = near[0] if len(near) else len(t) - 1
-    gap = np.abs(slide[: end + 1] - rigid[: end + 1]).max() / max(rigid[end], 1e-4)
+    gap, _ = gap_until_stopper(slide, rigid)
     return {"case": f"rock slope, {8 * hold:g} s", "solver": solver, "dt": sim.dt,
             "penalty": float(sim.model.joints.normal_penalty[0]), "error": float(gap),
             "cpu": cpu, "cuts": len(result.stats.cuts)}

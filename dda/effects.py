@@ -150,15 +150,20 @@ class AccelerationHistory:
         """(n, 2) acceleration at the times ``t`` (a record: linear between its samples)."""
         t = np.asarray(t, dtype=float)
         if self._callable is not None:
-            values = [self._callable(ti) for ti in t]
-            try:  # checked as a whole; one by one (for the message) only when that fails
-                a = np.array(values, dtype=float)
-            except (TypeError, ValueError):
-                a = None
-            if a is None or a.shape != (len(t), 2) or not np.isfinite(a).all():
-                a = np.array([_as_xy(v, f"{self.name}: acceleration(t)") for v in values])
-            return a.reshape(-1, 2)
+            return self._called(t).reshape(-1, 2)
         return np.stack([np.interp(t, self._times, self._acc[:, k]) for k in (0, 1)], axis=1)
+
+    def _called(self, t) -> np.ndarray:
+        """(len(t), 2) the callable's accelerations at the times ``t``, checked as a whole and
+        one by one (for the message) only when that fails."""
+        values = [self._callable(ti) for ti in t]
+        try:
+            a = np.array(values, dtype=float)
+        except (TypeError, ValueError):
+            a = None
+        if a is None or a.shape != (len(t), 2) or not np.isfinite(a).all():
+            a = np.array([_as_xy(v, f"{self.name}: acceleration(t)") for v in values])
+        return a
 
     def check_covers(self, t_end: float):
         """Raise ValueError when a recorded history ends before ``t_end``."""
@@ -192,13 +197,7 @@ class AccelerationHistory:
         if h <= 0.0:
             return u0.copy(), v0.copy(), (t0, v0, u0)
         s = h * _GL_X
-        values = [self._callable(t0 + si) for si in s]
-        try:  # checked as a whole; one by one (for the message) only when that fails
-            a = np.array(values, dtype=float)
-        except (TypeError, ValueError):
-            a = None
-        if a is None or a.shape != (len(s), 2) or not np.isfinite(a).all():
-            a = np.array([_as_xy(v, f"{self.name}: acceleration(t)") for v in values])
+        a = self._called(t0 + s)
         v = v0 + h * (_GL_W @ a)
         u = u0 + v0 * h + h * ((_GL_W * (h - s)) @ a)
         return u.copy(), v.copy(), (t, v, u)

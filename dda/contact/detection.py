@@ -749,11 +749,13 @@ def _inside_depth_kernel(p, kblock, x, offsets, nxt):
 
 
 @njit(cache=True)
-def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth):
+def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, midpoints=False):
     """Every corner (``corner[v]``) of one block of a pair in the other's box inside that
     block deeper than ``min_depth``: vertex, block, depth and nearest edge, the pairs in the
     order (j, k) first, then (k, j) (the guard's :func:`vertex_penetrations`; kept in this
-    file with :func:`_point_in_block`, whose cache it shares)."""
+    file with :func:`_point_in_block`, whose cache it shares). With ``midpoints`` the point of
+    vertex v is the midpoint of its edge to ``nxt[v]``, every edge's (``corner`` unused; the
+    guard's :func:`dda.contact.penetration.edge_penetrations`)."""
     n_pairs = pairs.shape[0]
     cap = 0
     for q in range(n_pairs):
@@ -770,47 +772,14 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth):
             k = pairs[q, 1 - s]
             xmin, ymin, xmax, ymax = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
             for v in range(offsets[j], offsets[j + 1]):
-                px, py = x[v, 0], x[v, 1]
+                if midpoints:
+                    w = nxt[v]
+                    px, py = 0.5 * (x[v, 0] + x[w, 0]), 0.5 * (x[v, 1] + x[w, 1])
+                else:
+                    px, py = x[v, 0], x[v, 1]
                 if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
                     continue
-                if not corner[v]:
-                    continue
-                inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
-                if inside and depth > min_depth:
-                    out_v[n_out] = v
-                    out_k[n_out] = k
-                    out_d[n_out] = depth
-                    out_e[n_out] = near
-                    n_out += 1
-    return out_v[:n_out].copy(), out_k[:n_out].copy(), out_d[:n_out].copy(), out_e[:n_out].copy()
-
-
-@njit(cache=True)
-def _midpoints_inside_kernel(x, offsets, nxt, pairs, boxes, min_depth):
-    """Every edge of one block of a pair whose midpoint lies inside the other block deeper
-    than ``min_depth``: edge (its start vertex), block, depth and nearest edge, in the order of
-    :func:`_corners_inside_kernel` (the guard's :func:`dda.contact.penetration.
-    edge_penetrations`)."""
-    n_pairs = pairs.shape[0]
-    cap = 0
-    for q in range(n_pairs):
-        for s in range(2):
-            cap += offsets[pairs[q, s] + 1] - offsets[pairs[q, s]]
-    out_v = np.empty(cap, dtype=np.int64)
-    out_k = np.empty(cap, dtype=np.int64)
-    out_d = np.empty(cap)
-    out_e = np.empty(cap, dtype=np.int64)
-    n_out = 0
-    for s in range(2):
-        for q in range(n_pairs):
-            j = pairs[q, s]
-            k = pairs[q, 1 - s]
-            xmin, ymin, xmax, ymax = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
-            for v in range(offsets[j], offsets[j + 1]):
-                w = nxt[v]
-                px = 0.5 * (x[v, 0] + x[w, 0])
-                py = 0.5 * (x[v, 1] + x[w, 1])
-                if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
+                if not (midpoints or corner[v]):
                     continue
                 inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
                 if inside and depth > min_depth:

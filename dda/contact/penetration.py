@@ -29,7 +29,6 @@ from dda.contact.contacts import OPEN
 from dda.contact.detection import (
     VertexTopology,
     _corners_inside_kernel,
-    _midpoints_inside_kernel,
     bounding_boxes,
     broad_phase,
 )
@@ -90,6 +89,14 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
     >>> pen.vertex.tolist(), pen.block.tolist(), np.round(pen.depth, 12).tolist()
     ([4, 7], [0, 0], [0.1, 0.1])
     """
+    # a vertex between collinear edges is a point of a side, not a corner: where two blocks
+    # overlap edge to edge it is inside the other, and the corners' springs hold the overlap
+    return _inside(x, topo, min_depth, pairs, boxes, midpoints=False)
+
+
+def _inside(x, topo, min_depth, pairs, boxes, midpoints) -> Penetrations:
+    """The corners (or edge midpoints) of ``x`` inside another block deeper than
+    ``min_depth`` (:func:`vertex_penetrations`, :func:`edge_penetrations`)."""
     offsets = topo.offsets
     if len(offsets) < 3:
         return _empty()
@@ -99,13 +106,11 @@ def vertex_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 
         pairs = broad_phase(boxes, 0.0)
     if len(pairs) == 0:
         return _empty()
-    # a vertex between collinear edges is a point of a side, not a corner: where two blocks
-    # overlap edge to edge it is inside the other, and the corners' springs hold the overlap
     x = np.ascontiguousarray(x, dtype=np.float64)
-    corner = ~topo.straight(x)
+    corner = np.ones(len(x), dtype=bool) if midpoints else ~topo.straight(x)
     vertex, kblock, depth, nearest = _corners_inside_kernel(
         x, offsets, topo.nxt, np.ascontiguousarray(pairs, dtype=np.int64), boxes, corner,
-        float(min_depth))
+        float(min_depth), midpoints)
     return Penetrations(vertex, kblock, depth, nearest)
 
 
@@ -127,20 +132,7 @@ def edge_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 0.
     >>> pen.vertex.tolist(), pen.block.tolist(), np.round(pen.depth, 12).tolist()
     ([2, 4], [1, 0], [0.003, 0.003])
     """
-    offsets = topo.offsets
-    if len(offsets) < 3:
-        return _empty()
-    if boxes is None:
-        boxes = bounding_boxes(x, offsets)
-    if pairs is None:
-        pairs = broad_phase(boxes, 0.0)
-    if len(pairs) == 0:
-        return _empty()
-    x = np.ascontiguousarray(x, dtype=np.float64)
-    edge, kblock, depth, nearest = _midpoints_inside_kernel(
-        x, offsets, topo.nxt, np.ascontiguousarray(pairs, dtype=np.int64), boxes,
-        float(min_depth))
-    return Penetrations(edge, kblock, depth, nearest)
+    return _inside(x, topo, min_depth, pairs, boxes, midpoints=True)
 
 
 def untracked_edge_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,

@@ -10,7 +10,7 @@ from dda.materials import LinearElastic
 
 __all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip",
            "stepped_table", "rock_slope", "slide_down_dip", "SLOPE_DIP", "SLOPE_STOP",
-           "ramped_sine", "stacked_cubes", "CUBE", "shaken_incline"]
+           "ramped_sine", "stacked_cubes", "CUBE", "shaken_incline", "gap_until_stopper"]
 
 G = 9.81
 
@@ -172,6 +172,17 @@ def rock_slope(friction, table=None, normal_penalty: float = 10e9,
                                   friction=friction))
     scene.shake(lower, acceleration=table if table is not None else stepped_table())
     return scene, lower, upper
+
+
+def gap_until_stopper(slide: np.ndarray, rigid: np.ndarray,
+                      near: float = 0.95) -> tuple[float, int]:
+    """The largest gap between a slide history and the rigid block's, over the rigid block's
+    slide when either first reaches ``near`` of the stopper distance ``SLOPE_STOP`` (the
+    whole history when neither does), and that record's index."""
+    at = np.flatnonzero((slide >= near * SLOPE_STOP) | (rigid >= near * SLOPE_STOP))
+    end = int(at[0]) if len(at) else len(slide) - 1
+    gap = np.abs(slide[: end + 1] - rigid[: end + 1]).max() / max(float(rigid[end]), 1e-4)
+    return float(gap), end
 
 
 def slide_down_dip(result, lower, upper) -> np.ndarray:
