@@ -56,7 +56,7 @@ def test_impact_matrix(name, penalty, dt, solver):
 @pytest.mark.parametrize("penalty", ["E/1e4", "E", "1000 E"])
 @pytest.mark.parametrize("name", CONCAVE)
 def test_impacts_into_concave_corners(name, penalty, dt, solver, request):
-    if (name, penalty, dt) == ("low stopper", "E/1e4", 1e-2):
+    if (name, penalty) == ("low stopper", "E/1e4") and dt != 1e-3:
         # the guard's edge probes (issue 20's session) see what the vertex guard did not:
         # the block tips over the stopper's top corner and its bottom-right corner region
         # hooks into the stopper's (its corner 4 mm past the stopper's side face, the
