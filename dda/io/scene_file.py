@@ -18,10 +18,11 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     plane = "stress"                      # or "strain"
 
     [joints.default]                      # the default joint; [[joints.pair]] for one pair
-    normal_penalty = 5e10
+    normal_penalty = 5e10                 # or "auto", chosen from the scene and dt
     shear_penalty = 5e10
     friction = { law = "coulomb", phi = 35.0, cohesion = 0.0 }
-    # law = "transition": phi_static, phi_dynamic; law = "barton": jrc, jcs, phi_r, ...
+    # law = "transition": phi_static, phi_dynamic, onset ("face", or the papers' "contact")
+    # law = "barton": jrc, jcs, phi_r, ...
     # law = "my_laws:BrittleCohesion": a law of your own, by import path (see below)
 
     [[joints.pair]]
@@ -69,7 +70,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     blocks = ["top"]                      # optional: default every block
 
     [simulation]
-    dt = 1e-3
+    dt = 1e-3                             # or "auto" (dda.auto_settings; dda info says why)
     duration = 1.0
     solver = "newton"                     # or "legacy" (see below); tol, max_iter: newton's
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
