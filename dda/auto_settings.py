@@ -157,13 +157,14 @@ def _block_loads(model, a_max: float) -> np.ndarray:
     width = np.maximum(x1 - x0, 1e-300)
     load = weight.copy()
     free = np.flatnonzero(model.free)
-    # the column above each free block, in chunks of rows (n x n would not fit for 10^4 blocks)
-    for lo in range(0, len(free), 1024):
-        i = free[lo:lo + 1024, None]
+    # the column above each free block, 256 rows at a time: at 10^4 blocks each temporary is
+    # 20 MB (all rows at once would be 800 MB)
+    for lo in range(0, len(free), 256):
+        i = free[lo:lo + 256, None]
         j = free[None, :]
         over = np.clip(np.minimum(x1[i], x1[j]) - np.maximum(x0[i], x0[j]), 0.0, None)
         above = yc[j] > yc[i]
-        load[free[lo:lo + 1024]] += ((over / width[j]) * above * weight[j]).sum(axis=1)
+        load[free[lo:lo + 256]] += ((over / width[j]) * above * weight[j]).sum(axis=1)
     if len(model.load_block):
         np.add.at(load, model.load_block, np.hypot(*model.load_constant.T))
     factor = 1.0 + (a_max / g if g > 0.0 else 0.0)
