@@ -228,9 +228,10 @@ def _detect(model, state, d0, tolerance) -> _Detected:
     topo = model.topo
     if model.n_blocks > 1:
         with section("detection"):
-            # a vertex sunk deeper than a quarter of the guard's tolerance is held by the
-            # edge nearest to it, and two such corners get a spring each
-            sunk = 0.25 * tolerance * model.min_thickness
+            # a vertex sunk deeper than a quarter of the guard's tolerance (of the thinner
+            # block of its pair) is held by the edge nearest to it, and two such corners get
+            # a spring each
+            sunk = 0.25 * tolerance * model.thickness
             pairs = _pairs(model, state.x, max(d0, pen_limit))
             cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk)
             closed = state.contacts.state != OPEN

@@ -1,6 +1,7 @@
 """Broad and narrow phase: the right vertex-edge pairs, and nothing twice."""
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -9,6 +10,7 @@ from dda.contact.detection import (
     bounding_boxes,
     broad_phase,
     find_overlaps,
+    keep_closed,
     narrow_phase,
 )
 from dda.contact.kinematics import contact_geometry
@@ -210,3 +212,30 @@ def test_compiled_boxes_and_broad_phase_are_the_numpy_ones():
             bounding_boxes(x, offsets),
             np.concatenate([np.minimum.reduceat(x, start, axis=0),
                             np.maximum.reduceat(x, start, axis=0)], axis=1))
+
+
+def test_a_face_shared_corner_on_corner_at_both_ends_keeps_both_contacts():
+    """Two blocks of the 311-block cut slope (Newton, automatic penalty, t = 0.337 s) share a
+    face with a corner on a corner at each end, their sides collinear. The face is held by
+    the lower block's top corner on the upper block's face and the upper block's bottom
+    corner on the lower block's face. The top corner went past the other block's side while
+    0.87 mm behind the face: the narrow phase no longer takes it (behind the line, not inside
+    the block), and keep_closed took the bottom contact for its mirror (an end of the edge
+    with a candidate against an edge at the vertex), so the face sank in untracked until the
+    guard stopped the run (the positions here, 5.5 mm deep). Only the end nearer the vertex's
+    foot can hold a mirror."""
+    lower = [(32.49085, -0.00061), (33.89117, 0.64929), (33.54944, 1.59313),
+             (32.09269, 0.91704), (32.42489, -0.00049)]
+    upper = [(34.12766, 0.00237), (33.88913, 0.65446), (32.49098, -0.00028)]
+    x, offsets = stack(lower, upper)
+    topo = VertexTopology.from_offsets(offsets)
+    d0, limit = 1e-3, 0.02
+    cand = narrow_phase(x, topo, d0, limit)
+    found = set(zip(cand.vertex.tolist(), cand.edge.tolist(), strict=True))
+    assert (7, 0) in found  # the bottom corner on the face
+    assert not {(1, 6), (6, 0), (6, 1)} & found  # neither top corner is seen
+    kept = keep_closed(cand, np.array([1, 7]), np.array([6, 0]), x, topo, d0, limit, 2)
+    assert {(1, 6), (7, 0)} <= set(zip(kept.vertex.tolist(), kept.edge.tolist(),
+                                            strict=True))
+    frame = contact_geometry(x, np.array([1]), np.array([6]), topo.nxt)
+    assert frame.gap[0] == pytest.approx(-5.55e-3, abs=1e-5)

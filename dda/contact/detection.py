@@ -252,9 +252,12 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
     deeper behind the edge's line than inside the block") dropped its contact, and the block
     fell through (``tests/stability/test_hard_cases.py``). A contact is not added back when
     its vertex has a candidate against the same block (it moved on to another edge, which
-    :func:`dda.contact.contacts.carry_over` follows) or when the corner at either end of its
-    edge has a candidate against an edge at the vertex (the mirrored vertex-vertex pair that
-    the narrow phase kept instead).
+    :func:`dda.contact.contacts.carry_over` follows) or when the corner at the end of its edge
+    nearer the vertex's foot has a candidate against an edge at the vertex (the mirrored
+    vertex-vertex pair that the narrow phase kept instead). Only that end: two blocks that
+    share a face corner on corner at both ends hold it by one vertex at each end, and the far
+    end's contact is no mirror of the near end's (the 311-block cut slope lost a face's upper
+    contact that way under Newton and the automatic penalty, and the face sank 6 mm in).
     """
     if len(closed_vertex) == 0:
         return cand
@@ -264,7 +267,7 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
                         np.asarray(cand.bk, dtype=np.int64),
                         np.asarray(closed_vertex, dtype=np.int64),
                         np.asarray(closed_edge, dtype=np.int64), blk, topo.nxt, topo.prv,
-                        n_blocks, len(x))
+                        n_blocks, np.ascontiguousarray(x, dtype=np.float64))
     if len(lost) == 0:
         return cand
     old_k = blk[closed_edge]
@@ -296,10 +299,11 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
 
 @njit(cache=True)
 def _lost_closed(cand_vertex, cand_edge, cand_block, closed_vertex, closed_edge, block, nxt,
-                 prv, n_blocks, n_vertices):
+                 prv, n_blocks, x):
     """Indices of the closed contacts :func:`keep_closed` may add back: their vertex has no
-    candidate against the edge's block, and neither end of their edge has one against either
-    edge at the vertex (its mirror)."""
+    candidate against the edge's block, and the end of their edge nearer the vertex's foot
+    has none against either edge at the vertex (its mirror)."""
+    n_vertices = x.shape[0]
     keys = np.sort(cand_vertex * n_blocks + cand_block)
     pair_keys = np.sort(cand_vertex * n_vertices + cand_edge)
     n = closed_vertex.shape[0]
@@ -310,12 +314,16 @@ def _lost_closed(cand_vertex, cand_edge, cand_block, closed_vertex, closed_edge,
         k = block[e]
         at = np.searchsorted(keys, v * n_blocks + k)
         found = at < keys.shape[0] and keys[at] == v * n_blocks + k
-        for q in (e, nxt[e]):
-            for f in (v, prv[v]):  # the edges of the vertex's block that end at it
-                if not found:
-                    key = q * n_vertices + f
-                    at = np.searchsorted(pair_keys, key)
-                    found = at < pair_keys.shape[0] and pair_keys[at] == key
+        # the end nearer the foot: xi from P2 = nxt[e] towards P3 = e
+        ex, ey = x[e, 0] - x[nxt[e], 0], x[e, 1] - x[nxt[e], 1]
+        xi = ((x[v, 0] - x[nxt[e], 0]) * ex + (x[v, 1] - x[nxt[e], 1]) * ey) / (ex * ex
+                                                                                + ey * ey)
+        q = nxt[e] if xi < 0.5 else e
+        for f in (v, prv[v]):  # the edges of the vertex's block that end at it
+            if not found:
+                key = q * n_vertices + f
+                at = np.searchsorted(pair_keys, key)
+                found = at < pair_keys.shape[0] and pair_keys[at] == key
         if not found:
             out[count] = i
             count += 1
@@ -380,7 +388,7 @@ def narrow_phase(
     search_distance: float,
     penetration_limit: float,
     pairs: np.ndarray | None = None,
-    sunk_depth: float = np.inf,
+    sunk_depth: float | np.ndarray = np.inf,
 ) -> CandidateContacts:
     """Vertex-edge contact candidates of the current configuration (rules in the module doc).
 
@@ -398,7 +406,9 @@ def narrow_phase(
         sliding round it, would go on sinking untracked). Near a corner a shallow vertex is
         nearer the side than the face it came through, so this must stay well above
         round-off and elastic strain: the simulation passes a quarter of the guard's
-        tolerance. Infinite (the default) turns both off.
+        tolerance. Infinite (the default) turns both off. A (n_blocks,) array gives each
+        block its own; a pair takes the smaller of its two blocks' (a sliver elsewhere in the
+        scene must not make the large blocks' resting depth "sunk").
     """
     boxes = bounding_boxes(x, topo.offsets)
     margin = max(search_distance, penetration_limit)
@@ -411,7 +421,9 @@ def narrow_phase(
     vertex, edge, kblock, on_edge, sunk = _narrow_kernel(
         x, topo.offsets, topo.nxt, topo.prv, np.ascontiguousarray(pairs, dtype=np.int64),
         boxes, margin, cross < 0.0, cross > 1e-9 * scale, bisector,
-        search_distance, penetration_limit, sunk_depth)
+        search_distance, penetration_limit,
+        np.ascontiguousarray(np.broadcast_to(sunk_depth, len(topo.offsets) - 1),
+                             dtype=np.float64))
     if len(vertex) == 0:
         return _empty_candidates(len(pairs))
     # the kernel gives each (vertex, block)'s edges in the order they were chosen in;
@@ -471,7 +483,7 @@ def _edge_order_before(i, j, least_deep, on_edge, neg_score):
 
 @njit(cache=True)
 def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, bisector,
-                   search_distance, penetration_limit, sunk_depth):
+                   search_distance, penetration_limit, sunk_depths):
     """The rules of :func:`narrow_phase` for every convex vertex of one block of a pair in the
     other's box grown by ``margin`` (both orders of every pair) against every edge of the
     other block: the gap range, the inside test behind an edge's line, the reach past the
@@ -513,6 +525,7 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
         for q in range(n_pairs):
             j = pairs[q, s]
             k = pairs[q, 1 - s]
+            sunk_depth = min(sunk_depths[j], sunk_depths[k])
             xmin = boxes[k, 0] - margin
             ymin = boxes[k, 1] - margin
             xmax = boxes[k, 2] + margin

@@ -153,3 +153,35 @@ def test_an_aligned_column_on_soft_springs_keeps_its_contacts(solver):
     top = result.displacement(3)[:, 1]
     assert top.min() > -0.01
     assert abs(top[-1]) < 0.006
+
+
+@pytest.mark.parametrize("solver", sorted(SOLVERS))
+def test_a_block_overhanging_by_less_than_its_spring_depth_keeps_its_face(solver):
+    """A unit square on a fixed unit square, its left side 0.3 mm past the lower block's (two
+    blocks meeting corner on corner on a continuous joint, as the cut slope's are), and a
+    2 cm sliver elsewhere in the scene. The lower block's top-left corner is 0.3 mm inside
+    the upper block from its side and sinks 0.5 mm under its face: deeper than a quarter of
+    the guard's tolerance of the *sliver* (0.05 mm), so the narrow phase took it for sunk,
+    held it by the nearest edge, the upper block's side, and the face sank into the lower
+    block untracked (the guard stopped the run at 0.035 s; the 311-block cut slope under
+    the automatic penalty stopped the same way at 0.09 s). A pair judges "sunk" by the
+    thinner of its own two blocks."""
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-1, -1), (2, -1), (2, 0), (-1, 0)], rock, fixed=True, name="base")
+    scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], rock, fixed=True, name="lower")
+    s = 3e-4
+    scene.add_block([(-s, 1), (1 - s, 1), (1 - s, 2), (-s, 2)], rock, name="upper")
+    scene.add_block([(5, 0), (6, 0), (6, 0.02), (5, 0.02)], rock, name="sliver")
+    scene.set_joint(JointMaterial(2.55e7, 2.55e7, CoulombSingle(phi=35.0)))
+    sim = dda.Simulation(scene, dt=0.005, solver=make_solver(solver))
+    result = sim.run(0.3, progress=False)
+    c = sim.committed.contacts
+    closed = c.state != OPEN
+    upper_face, lower_top = 8, 6  # the upper block's bottom edge, the lower block's top
+    pairs = sorted(zip(c.vertex[closed].tolist(), c.edge[closed].tolist(), strict=True))
+    assert pairs == [(7, upper_face), (9, lower_top)]
+    # the block rests on two springs: 2600 x 9.81 / 2 / 2.55e7 = 0.50 mm
+    dy = result.displacement(2)[:, 1]
+    assert dy[-1] == pytest.approx(-2600 * 9.81 / 2 / 2.55e7, rel=0.05)
+    assert dy.min() > -0.002
