@@ -236,7 +236,7 @@ def _detect(model, state, d0, tolerance) -> _Detected:
             cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk)
             closed = state.contacts.state != OPEN
             cand = keep_closed(cand, state.contacts.vertex[closed], state.contacts.edge[closed],
-                               state.x, topo, d0, pen_limit, model.n_blocks)
+                               state.x, topo, d0, pen_limit, model.n_blocks, sunk)
             contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt,
                                                topo.prv, model.n_blocks)
     else:  # a single block: nothing to detect

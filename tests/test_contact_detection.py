@@ -239,3 +239,64 @@ def test_a_face_shared_corner_on_corner_at_both_ends_keeps_both_contacts():
                                             strict=True))
     frame = contact_geometry(x, np.array([1]), np.array([6]), topo.nxt)
     assert frame.gap[0] == pytest.approx(-5.55e-3, abs=1e-5)
+
+
+def test_a_sunk_corner_keeps_the_face_it_is_held_by_against_a_side_as_deep():
+    """The cut slope (Newton, automatic penalty, t = 0.33 s): a block's corner under another
+    block's face, at the corner of that face, 0.888 mm behind the face and 0.875 mm behind
+    the side (the two blocks' sides on one joint), deeper than the pair's sunk depth
+    (0.863 mm). The narrow phase holds a sunk vertex by the edge it is least deep behind:
+    the side, whose spring cannot hold the face; the contact flipped between face and side on
+    round-off and the face sank in (the guard stopped the run 4.8 mm deep at 1.93 s). A
+    closed contact keeps its edge unless the new one is shallower by more than the sunk
+    depth."""
+    lower = box(0.0, 0.0, 1.0, 1.0)
+    upper = box(-0.875e-3, 1.0 - 0.888e-3, 1.0, 1.0)
+    x, offsets = stack(lower, upper)
+    topo = VertexTopology.from_offsets(offsets)
+    corner = int(np.flatnonzero((x[:4, 0] == 0.0) & (x[:4, 1] == 1.0))[0])
+    u = x[4:]
+    bottom = 4 + int(np.flatnonzero(u[:, 1] == u[:, 1].min())[np.argmin(
+        u[u[:, 1] == u[:, 1].min(), 0])])  # the upper block's edge from its bottom left
+    side = int(topo.prv[bottom])  # ... and the edge that ends there: its left side
+    d0, limit, sunk = 1e-4, 0.01, 0.863e-3
+    cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
+    mine = cand.bk == 1
+    assert list(cand.edge[(cand.vertex == corner) & mine]) == [side]
+    closed_v, closed_e = np.array([corner]), np.array([bottom])
+    kept = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, sunk)
+    assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [bottom]
+    assert kept.geometry.gap[(kept.vertex == corner) & (kept.bk == 1)][0] == pytest.approx(
+        -0.888e-3, rel=1e-6)
+    # without the hysteresis (sunk depth 0) it moves on to the side, as before
+    moved = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, 0.0)
+    assert list(moved.edge[(moved.vertex == corner) & (moved.bk == 1)]) == [side]
+    # a side shallower by more than the sunk depth takes it (a block rotating round a
+    # corner deep inside it)
+    upper = box(-0.875e-3, 1.0 - 2.0e-3, 1.0, 1.0)
+    x, offsets = stack(lower, upper)
+    cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
+    kept = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, sunk)
+    assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [side]
+
+
+def test_a_vertex_vertex_pair_across_another_joint_is_no_mirror():
+    """The cut slope (Newton, automatic penalty, t = 0.053 s): a sliver slid 6 mm down the
+    face it shares with a larger block, whose sides are on one joint with the sliver's. The
+    larger block's corner was held closed on the sliver's face; the narrow phase found
+    instead the sliver's corner on the larger block's side, and keep_closed took that for
+    the closed contact's mirror: the face lost its lower contact and sank in 1.1 mm (the
+    guard stopped the run at 0.197 s; these are the positions there). A mirror holds the same
+    joint: its edge runs against the contact's edge."""
+    big = [(60.01417, 17.5896), (59.77061, 18.25836), (58.31512, 17.5793),
+           (58.65863, 16.63609), (60.01424, 17.26855)]
+    sliver = [(60.0164, 18.36555), (59.77266, 18.25272), (60.01421, 17.58323)]
+    x, offsets = stack(big, sliver)
+    topo = VertexTopology.from_offsets(offsets)
+    d0, limit, sunk = 1e-3, 0.01, 0.25 * 0.01 * 0.108  # the sliver's quarter tolerance
+    cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
+    found = set(zip(cand.vertex.tolist(), cand.edge.tolist(), strict=True))
+    assert (7, 4) in found  # the sliver's corner on the big block's side
+    assert not any(v == 0 for v, _ in found)  # the big block's corner is not seen
+    kept = keep_closed(cand, np.array([0]), np.array([6]), x, topo, d0, limit, 2, sunk)
+    assert (0, 6) in set(zip(kept.vertex.tolist(), kept.edge.tolist(), strict=True))

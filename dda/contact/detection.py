@@ -53,6 +53,9 @@ __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "Ca
            "inside_depth", "keep_closed"]
 
 ENTRANCE_TOLERANCE_DEG = 20.0
+# a closed contact's mirror (keep_closed) lies along the same joint: its edge runs against the
+# contact's within this angle (two joint sets of a cut slope meet at 20 degrees)
+MIRROR_TOLERANCE_DEG = 5.0
 _XI_TOL = 1e-9
 # gaps to two edges within this fraction of the edge length are a tie (round-off)
 _GAP_TIE = 1e-9
@@ -239,95 +242,193 @@ class CandidateContacts:
 
 
 def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
-                search_distance: float, penetration_limit: float,
-                n_blocks: int) -> CandidateContacts:
-    """The candidates plus every closed contact of the last step that the narrow phase did not
-    find again but whose vertex still lies over its edge (foot parameter in [0, 1] up to
-    round-off) within ``[-penetration_limit, search_distance]`` of its line.
+                search_distance: float, penetration_limit: float, n_blocks: int,
+                sunk_depth: float | np.ndarray = 0.0) -> CandidateContacts:
+    """The candidates with the closed contacts of the last step that the narrow phase lost
+    or moved to the next edge too early put back.
 
     The narrow phase's rules pick the edge a vertex *enters* by; once a contact is closed, its
-    vertex may sink where those rules no longer see it. Where blocks stand corner on corner
-    (a column, a wall's bond) a loaded corner sinks into the block below exactly along its side
-    face's line: it is no distance inside that block, so the rule against far edges ("no
-    deeper behind the edge's line than inside the block") dropped its contact, and the block
-    fell through (``tests/stability/test_hard_cases.py``). A contact is not added back when
-    its vertex has a candidate against the same block (it moved on to another edge, which
-    :func:`dda.contact.contacts.carry_over` follows) or when the corner at the end of its edge
-    nearer the vertex's foot has a candidate against an edge at the vertex (the mirrored
-    vertex-vertex pair that the narrow phase kept instead). Only that end: two blocks that
-    share a face corner on corner at both ends hold it by one vertex at each end, and the far
-    end's contact is no mirror of the near end's (the 311-block cut slope lost a face's upper
-    contact that way under Newton and the automatic penalty, and the face sank 6 mm in).
+    vertex may sink where those rules no longer see it, or see another edge. Two cases:
+
+    - *Lost*: no candidate of the vertex against the edge's block. Where blocks stand corner
+      on corner (a column, a wall's bond) a loaded corner sinks into the block below exactly
+      along its side face's line: it is no distance inside that block, so the rule against
+      far edges ("no deeper behind the edge's line than inside the block") dropped its
+      contact, and the block fell through (``tests/stability/test_hard_cases.py``). The
+      contact is put back when its vertex lies over its edge (foot parameter in [0, 1] up to
+      round-off) or past its end by no more than it is deep behind the edge's line plus the
+      search distance, and its gap is within ``[-penetration_limit, search_distance]``; not
+      when the corner at the end of its edge nearer the vertex's foot has a candidate against
+      an edge at the vertex (the mirrored vertex-vertex pair that the narrow phase kept
+      instead). Only that end: two blocks that share a face corner on corner at both ends hold
+      it by one vertex at each end, and the far end's contact is no mirror of the near end's
+      (the 311-block cut slope lost a face's upper contact that way under Newton and the
+      automatic penalty, and the face sank 6 mm in).
+    - *Turned the corner early*: the narrow phase chose the edge next to the contact's across
+      a convex corner of the block while the vertex still lies over its own edge and is not
+      shallower behind the new edge by more than ``sunk_depth`` (of the pair's thinner block).
+      A vertex sunk into a block near its corner is held by the edge it is least deep behind;
+      on a face shared corner on corner with collinear sides (two joint sets cutting a slope)
+      the corner of one block sits under the other's face and as deep behind its side: the
+      choice flipped between face and side on round-off, ended on the side, whose spring cannot
+      hold the face, and the face sank in (the cut slope, Newton, t = 0.33 s: 0.888 mm behind
+      the face, 0.875 mm behind the side; stopped by the guard 4.8 mm deep at 1.93 s). The
+      contact keeps its edge; a vertex that slides round the corner leaves its edge's span
+      and moves on to the next edge as before (:func:`dda.contact.contacts.carry_over`), and
+      one that rotates round it deep inside the block (a block tipping over a stopper's
+      corner 2 cm deep on a soft penalty) moves on once the new edge is the shallower by more
+      than the sunk depth. ``sunk_depth`` 0 turns this off.
     """
     if len(closed_vertex) == 0:
         return cand
     blk = topo.block
-    lost = _lost_closed(np.asarray(cand.vertex, dtype=np.int64),
-                        np.asarray(cand.edge, dtype=np.int64),
-                        np.asarray(cand.bk, dtype=np.int64),
-                        np.asarray(closed_vertex, dtype=np.int64),
-                        np.asarray(closed_edge, dtype=np.int64), blk, topo.nxt, topo.prv,
-                        n_blocks, np.ascontiguousarray(x, dtype=np.float64))
-    if len(lost) == 0:
+    closed_vertex = np.asarray(closed_vertex, dtype=np.int64)
+    closed_edge = np.asarray(closed_edge, dtype=np.int64)
+    lost, turned, turned_row = _stale_closed(
+        np.asarray(cand.vertex, dtype=np.int64), np.asarray(cand.edge, dtype=np.int64),
+        np.asarray(cand.bk, dtype=np.int64), closed_vertex, closed_edge, blk, topo.nxt,
+        topo.prv, n_blocks, np.ascontiguousarray(x, dtype=np.float64))
+    sunk = np.broadcast_to(np.asarray(sunk_depth, dtype=np.float64), (n_blocks,))
+    if len(turned):
+        # only across a convex corner of the block (a reflex one keeps both edges already)
+        e, f = closed_edge[turned], cand.edge[turned_row]
+        corner = np.where(f == topo.nxt[e], topo.nxt[e], e)
+        keep_turn = (~topo.reflex(x)[corner]) & (np.minimum(
+            sunk[blk[closed_vertex[turned]]], sunk[blk[e]]) > 0.0)
+        turned, turned_row = turned[keep_turn], turned_row[keep_turn]
+    if len(lost) == 0 and len(turned) == 0:
         return cand
-    old_k = blk[closed_edge]
-    frame = contact_geometry(x, closed_vertex[lost], closed_edge[lost], topo.nxt)
-    # over the edge, or past its end by no more than it is deep behind the edge's line (a
-    # corner on a corner: both sink together, the foot drifts past the end by round-off and
-    # strain) plus the search distance
+    back = np.concatenate([lost, turned])
+    frame = contact_geometry(x, closed_vertex[back], closed_edge[back], topo.nxt)
     over = (frame.xi >= -_XI_TOL) & (frame.xi <= 1.0 + _XI_TOL)
+    # a corner on a corner: both sink together, the foot drifts past the end by round-off
+    # and strain, by no more than the vertex is deep behind the line plus the search distance
     past = np.maximum(-frame.xi, frame.xi - 1.0) * frame.length
-    keep = ((over | (past <= search_distance + np.maximum(-frame.gap, 0.0)))
-            & (frame.gap <= search_distance) & (frame.gap >= -penetration_limit))
+    near = over | (past <= search_distance + np.maximum(-frame.gap, 0.0))
+    keep = (frame.gap <= search_distance) & (frame.gap >= -penetration_limit)
+    keep[:len(lost)] &= near[:len(lost)]
+    if len(turned):
+        t = slice(len(lost), None)
+        new_gap = (cand.geometry.gap[turned_row] if cand.geometry is not None else
+                   contact_geometry(x, cand.vertex[turned_row], cand.edge[turned_row],
+                                    topo.nxt).gap)
+        hysteresis = np.minimum(sunk[blk[closed_vertex[turned]]], sunk[blk[closed_edge[turned]]])
+        # only a sunk vertex (deeper behind the new edge, its least deep, than the sunk
+        # depth): the narrow phase's entrance rule judges the others
+        keep[t] &= over[t] & (-new_gap > hysteresis) & (new_gap - frame.gap[t] <= hysteresis)
     if not keep.any():
         return cand
-    lost = lost[keep]
-    vertex = np.concatenate([cand.vertex, closed_vertex[lost]])
-    edge = np.concatenate([cand.edge, closed_edge[lost]])
-    bk = np.concatenate([cand.bk, old_k[lost]])
+    drop = turned_row[keep[len(lost):]]
+    back = back[keep]
+    stay = np.ones(len(cand), dtype=bool)
+    stay[drop] = False
+    vertex = np.concatenate([cand.vertex[stay], closed_vertex[back]])
+    edge = np.concatenate([cand.edge[stay], closed_edge[back]])
+    bk = np.concatenate([cand.bk[stay], blk[closed_edge[back]]])
     order = np.argsort(vertex * n_blocks + bk, kind="stable")
     geometry = None
     if cand.geometry is not None or len(cand) == 0:
-        new = ContactGeometry(*(getattr(frame, name)[keep]
-                                for name in ContactGeometry.__dataclass_fields__))
-        parts = [new] if cand.geometry is None else [cand.geometry, new]
+        fields = ContactGeometry.__dataclass_fields__
+        new = ContactGeometry(*(getattr(frame, name)[keep] for name in fields))
+        parts = [new] if cand.geometry is None else [
+            ContactGeometry(*(getattr(cand.geometry, name)[stay] for name in fields)), new]
         geometry = ContactGeometry(*(np.concatenate([getattr(g, name) for g in parts])[order]
-                                     for name in ContactGeometry.__dataclass_fields__))
+                                     for name in fields))
     return CandidateContacts(vertex=vertex[order], edge=edge[order], bj=blk[vertex[order]],
                              bk=bk[order], pairs=cand.pairs, geometry=geometry)
 
 
 @njit(cache=True)
-def _lost_closed(cand_vertex, cand_edge, cand_block, closed_vertex, closed_edge, block, nxt,
-                 prv, n_blocks, x):
-    """Indices of the closed contacts :func:`keep_closed` may add back: their vertex has no
-    candidate against the edge's block, and the end of their edge nearer the vertex's foot
-    has none against either edge at the vertex (its mirror)."""
+def _stale_closed(cand_vertex, cand_edge, cand_block, closed_vertex, closed_edge, block, nxt,
+                  prv, n_blocks, x):
+    """The closed contacts :func:`keep_closed` may put back.
+
+    Returns the indices of the lost ones (their vertex has no candidate against the edge's
+    block, and the end of their edge nearer the vertex's foot has none against either edge
+    at the vertex: its mirror), of the turned ones (the vertex's candidates against the block
+    do not include the edge but include an edge next to it) and, for each turned one, the row
+    of that candidate.
+    """
     n_vertices = x.shape[0]
-    keys = np.sort(cand_vertex * n_blocks + cand_block)
+    n_cand = cand_vertex.shape[0]
+    cos_tol = np.cos(np.radians(MIRROR_TOLERANCE_DEG))
+    keys = cand_vertex * n_blocks + cand_block
+    by_key = np.argsort(keys, kind="mergesort")
+    sorted_keys = keys[by_key]
     pair_keys = np.sort(cand_vertex * n_vertices + cand_edge)
     n = closed_vertex.shape[0]
-    out = np.empty(n, dtype=np.int64)
-    count = 0
+    lost = np.empty(n, dtype=np.int64)
+    turned = np.empty(n, dtype=np.int64)
+    turned_row = np.empty(n, dtype=np.int64)
+    n_lost = 0
+    n_turned = 0
     for i in range(n):
         v, e = closed_vertex[i], closed_edge[i]
-        k = block[e]
-        at = np.searchsorted(keys, v * n_blocks + k)
-        found = at < keys.shape[0] and keys[at] == v * n_blocks + k
+        key = v * n_blocks + block[e]
+        at = np.searchsorted(sorted_keys, key)
+        if at < n_cand and sorted_keys[at] == key:
+            same = False
+            row = -1
+            while at < n_cand and sorted_keys[at] == key:
+                r = by_key[at]
+                f = cand_edge[r]
+                if f == e:
+                    same = True
+                elif row < 0 and (f == nxt[e] or f == prv[e]):
+                    row = r
+                at += 1
+            if not same and row >= 0:
+                turned[n_turned] = i
+                turned_row[n_turned] = row
+                n_turned += 1
+            continue
         # the end nearer the foot: xi from P2 = nxt[e] towards P3 = e
         ex, ey = x[e, 0] - x[nxt[e], 0], x[e, 1] - x[nxt[e], 1]
         xi = ((x[v, 0] - x[nxt[e], 0]) * ex + (x[v, 1] - x[nxt[e], 1]) * ey) / (ex * ex
                                                                                 + ey * ey)
         q = nxt[e] if xi < 0.5 else e
+        found = False
         for f in (v, prv[v]):  # the edges of the vertex's block that end at it
             if not found:
-                key = q * n_vertices + f
-                at = np.searchsorted(pair_keys, key)
-                found = at < pair_keys.shape[0] and pair_keys[at] == key
+                pk = q * n_vertices + f
+                at = np.searchsorted(pair_keys, pk)
+                found = at < pair_keys.shape[0] and pair_keys[at] == pk
+        if found and _shares_face(v, e, xi, x, nxt, prv, cos_tol):
+            # the vertex's own block lies along the edge (a face shared with k, not corners
+            # touching across a junction): a pair at its end across another joint is no
+            # mirror unless it holds this joint, its edge running against this one
+            found = False
+            for f in (v, prv[v]):
+                if not found:
+                    pk = q * n_vertices + f
+                    at = np.searchsorted(pair_keys, pk)
+                    if at < pair_keys.shape[0] and pair_keys[at] == pk:
+                        gx, gy = x[nxt[f], 0] - x[f, 0], x[nxt[f], 1] - x[f, 1]
+                        found = ex * gx + ey * gy >= cos_tol * np.sqrt(
+                            (ex * ex + ey * ey) * (gx * gx + gy * gy))
         if not found:
-            out[count] = i
-            count += 1
-    return out[:count].copy()
+            lost[n_lost] = i
+            n_lost += 1
+    return lost[:n_lost].copy(), turned[:n_turned].copy(), turned_row[:n_turned].copy()
+
+
+@njit(cache=True)
+def _shares_face(v, e, xi, x, nxt, prv, cos_tol):
+    """Whether vertex v, whose foot on edge e is at ``xi`` (from P2 = nxt[e] towards
+    P3 = e), has an edge of its own block running against e (within ``acos(cos_tol)``) that
+    overlaps it over a length: the two blocks share that face."""
+    ex, ey = x[e, 0] - x[nxt[e], 0], x[e, 1] - x[nxt[e], 1]
+    ee = ex * ex + ey * ey
+    for far, g0 in ((nxt[v], v), (prv[v], prv[v])):
+        gx, gy = x[nxt[g0], 0] - x[g0, 0], x[nxt[g0], 1] - x[g0, 1]
+        if ex * gx + ey * gy < cos_tol * np.sqrt(ee * (gx * gx + gy * gy)):
+            continue
+        xi_far = ((x[far, 0] - x[nxt[e], 0]) * ex + (x[far, 1] - x[nxt[e], 1]) * ey) / ee
+        lo = max(0.0, min(xi, xi_far))
+        hi = min(1.0, max(xi, xi_far))
+        if hi - lo > 1e-6:
+            return True
+    return False
 
 
 def _empty_candidates(pairs: int) -> CandidateContacts:
@@ -466,6 +567,7 @@ class _Candidates:
 
 
 _SIN_TOL = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
+
 
 
 @njit(cache=True)
