@@ -2,7 +2,7 @@
 slope per simulated second, and the growth of a step's cost with the number of blocks.
 
 Run:  python benchmarks/targets.py [--rock-slope-seconds S] [--cut-slope-seconds S]
-                                   [--solvers legacy newton]
+                                   [--solvers legacy newton] [--cases rock cut cut-auto]
 
 Prints, for each solver:
 
@@ -13,6 +13,8 @@ Prints, for each solver:
   requested) for ``--cut-slope-seconds`` (default 0.3) of shaking, and its CPU seconds per
   simulated second times 10 (the issue's 10 s of earthquake). Target: under 30 minutes. Also
   the share of its steps cut (target: under 1%) and its OPEN-CLOSE passes per step.
+- ``cut slope (auto)``: the same slope with ``JointMaterial("auto", "auto", ...)`` and
+  ``dt="auto"`` (``dda.auto_settings``), the same measures.
 - the growth exponent of the cost of a step with the number of blocks, fitted to the N x N
   stacks of ``benchmarks/results/stacks.md`` (run ``benchmarks/stacks.py`` first). Target:
   at most 1.2.
@@ -56,20 +58,26 @@ def rock_slope(solver: str, seconds: float) -> dict:
             "passes": float(np.mean(result.stats["open_close_passes"]))}
 
 
-def cut_slope(solver: str, seconds: float) -> dict:
+def cut_slope(solver: str, seconds: float, auto: bool = False) -> dict:
     sys.path.insert(0, str(ROOT / "examples"))
     from jointed_slope import build_scene
 
     import dda
+    from dda.contact import JointMaterial
     from dda.registry import make_solver
 
     scene, _, _ = build_scene()
-    sim = dda.Simulation(scene, dt=2e-3, solver=make_solver(solver), max_open_close=30)
+    dt = 2e-3
+    if auto:
+        scene.set_joint(JointMaterial("auto", "auto", scene.default_joint.friction))
+        dt = "auto"
+    sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver), max_open_close=30)
     wall, cpu = time.perf_counter(), time.process_time()
     result = sim.run(seconds, progress=False)
     wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
     st = result.stats
-    return {"case": "cut slope", "solver": solver, "seconds": seconds, "wall": wall,
+    return {"case": "cut slope (auto)" if auto else "cut slope", "solver": solver,
+            "seconds": seconds, "wall": wall,
             "cpu": cpu, "steps": len(st), "cuts": len(st.cuts),
             "passes": float(np.mean(st["open_close_passes"])),
             "dt_median": float(np.median(np.diff(np.asarray(st["time"]), prepend=0.0)))}
@@ -96,16 +104,22 @@ def main(argv=None):
     ap.add_argument("--rock-slope-seconds", type=float, default=16.0)
     ap.add_argument("--cut-slope-seconds", type=float, default=0.3)
     ap.add_argument("--solvers", nargs="+", default=["legacy", "newton"])
+    ap.add_argument("--cases", nargs="+", default=["rock", "cut", "cut-auto"],
+                    choices=["rock", "cut", "cut-auto"])
     ap.add_argument("--one", nargs=3, help=argparse.SUPPRESS)
     ap.add_argument("--out", default=str(HERE / "results" / "targets.md"))
     args = ap.parse_args(argv)
     if args.one:
         case, solver, seconds = args.one
-        run = {"rock": rock_slope, "cut": cut_slope}[case]
+        run = {"rock": rock_slope, "cut": cut_slope,
+               "cut-auto": lambda *a: cut_slope(*a, auto=True)}[case]
         print(json.dumps(run(solver, float(seconds))))
         return None
     rows = []
-    for case, seconds in (("rock", args.rock_slope_seconds), ("cut", args.cut_slope_seconds)):
+    seconds_of = {"rock": args.rock_slope_seconds, "cut": args.cut_slope_seconds,
+                  "cut-auto": args.cut_slope_seconds}
+    for case in args.cases:
+        seconds = seconds_of[case]
         for solver in args.solvers:
             out = subprocess.run([sys.executable, __file__, "--one", case, solver,
                                   str(seconds)], capture_output=True, text=True, check=True)

@@ -74,6 +74,10 @@ def test_jointed_slope_example(tmp_path, capsys):
     assert "blocks cut from the slope" in capsys.readouterr().out
     assert (tmp_path / "slope.pvd").exists()
     assert np.all(np.isfinite(moved)) and moved.max() < 0.05
+    result, _, moved = demo.main(["--out", str(tmp_path / "auto"), "--duration", "0.01",
+                                  "--auto"])
+    assert "auto" in capsys.readouterr().out
+    assert np.all(np.isfinite(moved)) and moved.max() < 0.05
 
 
 def test_user_friction_law(capsys):
