@@ -153,6 +153,7 @@ class Model:
         self.density = np.array([b.material.density for b in blocks])
         self.elasticity = np.stack([b.material.elasticity() for b in blocks])
         young = np.array([b.material.young for b in blocks])
+        self.young = young
         self.gravity = scene.gravity
 
         # blocks whose motion is known carry no unknowns; rigid ones carry no strain unknowns

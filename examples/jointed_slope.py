@@ -17,21 +17,22 @@ for dt 1.25e-4 the face moved 25 / 41 mm, for 6.25e-5, 30 / 60 mm (issue 19's th
 The penalty (5e10 N/m, 540 times the lightest block's inertia at 2e-3 s) is stiff for dt, and
 ``dda.PenaltyWarning`` says so after 20 cuts.
 
-``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``): 2.2e9 N/m at
-dt 7.1e-4 s (legacy), 4e8 N/m at 1.7e-3 s (Newton). It runs the 0.3 s in 11 s (424 steps, 1
-cut) and 10 s of shaking in 4.3 min of CPU (legacy, 14,004 steps, 1 cut) and 3.3 min (Newton,
-6,050 steps, 4 cuts), where the example's own penalty takes 28 and 42 min at 3-4% of steps
-cut (``benchmarks/results/targets*.md``). But the joints are then softer than the rock
-(2.2e9 N/m is 0.22 x its Young's modulus) and the face moves twice as far: after 0.3 s (legacy)
-55 / 85 mm at 2.2e9 N/m (57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: not the step), 38 /
-65 mm at 5e9, 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10. The automatic rule
-holds single blocks on their bases (its validation) but has no floor for a jointed rock mass's
-stiffness yet; the example keeps 5e10 N/m. (Before those detection changes the automatic run
-stopped at 0.09 s: detection lost faces where corners meet on continuous joints.)
+``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``): blocks carry
+blocks here, so the penalty is twice the rock's Young's modulus, 2e10 N/m, at dt 2.4e-4 s
+(3 times the lightest block's inertia), for both solvers. After 0.3 s the face blocks moved
+25.8 / 41.7 mm (legacy, 30 s of CPU, 1,298 steps, 4 cut) and 27.1 / 43.6 mm (Newton, 47 s,
+1,389 steps, 8 cut). The penalty sweep behind that floor (legacy, 0.3 s, median / most): 55 /
+85 mm at 2.2e9 N/m (the rule without the floor; 57 / 89 and 61 / 107 mm at dt 3.6e-4 and
+1.8e-4: it is the penalty, not dt), 38 / 65 mm at 5e9, 31 / 42 mm at 1e10, 29 / 46 mm at 2e10,
+27 / 51 mm at 5e10: joints softer than the rock make the whole mass softer and its face moves
+further. 10 s of shaking under ``--auto``: 12.6 min of CPU (legacy, 42,482 steps, 8 cut)
+and 19.6 min (Newton, 42,598 steps, 18 cut). (Before the detection fixes of the session after
+issue 20's, the automatic run stopped at 0.09 s: detection lost faces where corners meet on
+continuous joints; without the floor it then ran 10 s in 4.3 (legacy) and 3.3 (Newton)
+minutes, its face 0.91 / 1.59 and 1.76 / 3.20 m out.)
 Through 10 s of shaking (``--duration 10``) the slope fails: legacy DDA took 12.9 minutes of
 CPU (27,009 steps, 828 cuts: 3.1%, 1.9 GB at its peak), and the face blocks ended 0.71 m
-(median) and 1.86 m (most) from where they started (issue 19's fifth part; not rerun since);
-with ``--auto``, 0.91 / 1.59 m (legacy) and 1.76 / 3.20 m (Newton).
+(median) and 1.86 m (most) from where they started (issue 19's fifth part; not rerun since).
 The shaken slope is chaotic at this level: round-off (SuperLU instead of PARDISO) moved the
 face by several millimetres; 28 and 53 mm before the contact-integrity fixes of issue 17.
 An order-of-magnitude check, not a validation: on the 25 degree bedding with phi 35 degrees, a
