@@ -263,10 +263,17 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
       instead). Only that end: two blocks that share a face corner on corner at both ends hold
       it by one vertex at each end, and the far end's contact is no mirror of the near end's
       (the 311-block cut slope lost a face's upper contact that way under Newton and the
-      automatic penalty, and the face sank 6 mm in).
+      automatic penalty, and the face sank 6 mm in). And where the vertex's own block shares
+      the face (an edge at the vertex runs against the contact's edge, within
+      ``MIRROR_TOLERANCE_DEG``, over a length), a candidate at that end is a mirror only if
+      its edge runs against the contact's edge too: a sliver that slid down a face had its
+      corner taken on the other block's side, 20 degrees off, and the face lost its contact.
+      Corners that only touch across a junction (a stack's diagonal neighbours) keep the
+      plain rule.
     - *Turned the corner early*: the narrow phase chose the edge next to the contact's across
-      a convex corner of the block while the vertex still lies over its own edge and is not
-      shallower behind the new edge by more than ``sunk_depth`` (of the pair's thinner block).
+      a convex corner of the block for a sunk vertex (deeper behind the new edge than
+      ``sunk_depth``, of the pair's thinner block) that still lies over its own edge and is
+      not shallower behind the new edge by more than ``sunk_depth``.
       A vertex sunk into a block near its corner is held by the edge it is least deep behind;
       on a face shared corner on corner with collinear sides (two joint sets cutting a slope)
       the corner of one block sits under the other's face and as deep behind its side: the
@@ -388,24 +395,23 @@ def _stale_closed(cand_vertex, cand_edge, cand_block, closed_vertex, closed_edge
                                                                                 + ey * ey)
         q = nxt[e] if xi < 0.5 else e
         found = False
+        shares = -1  # whether the vertex's block shares the face: asked only on a hit
         for f in (v, prv[v]):  # the edges of the vertex's block that end at it
-            if not found:
-                pk = q * n_vertices + f
-                at = np.searchsorted(pair_keys, pk)
-                found = at < pair_keys.shape[0] and pair_keys[at] == pk
-        if found and _shares_face(v, e, xi, x, nxt, prv, cos_tol):
-            # the vertex's own block lies along the edge (a face shared with k, not corners
-            # touching across a junction): a pair at its end across another joint is no
-            # mirror unless it holds this joint, its edge running against this one
-            found = False
-            for f in (v, prv[v]):
-                if not found:
-                    pk = q * n_vertices + f
-                    at = np.searchsorted(pair_keys, pk)
-                    if at < pair_keys.shape[0] and pair_keys[at] == pk:
-                        gx, gy = x[nxt[f], 0] - x[f, 0], x[nxt[f], 1] - x[f, 1]
-                        found = ex * gx + ey * gy >= cos_tol * np.sqrt(
-                            (ex * ex + ey * ey) * (gx * gx + gy * gy))
+            pk = q * n_vertices + f
+            at = np.searchsorted(pair_keys, pk)
+            if found or not (at < pair_keys.shape[0] and pair_keys[at] == pk):
+                continue
+            if shares < 0:
+                shares = 1 if _shares_face(v, e, xi, x, nxt, prv, cos_tol) else 0
+            if shares == 0:
+                found = True
+            else:
+                # a face shared with k (not corners touching across a junction): a pair at
+                # its end across another joint is no mirror unless it holds this joint, its
+                # edge running against this one
+                gx, gy = x[nxt[f], 0] - x[f, 0], x[nxt[f], 1] - x[f, 1]
+                found = ex * gx + ey * gy >= cos_tol * np.sqrt(
+                    (ex * ex + ey * ey) * (gx * gx + gy * gy))
         if not found:
             lost[n_lost] = i
             n_lost += 1
@@ -567,7 +573,6 @@ class _Candidates:
 
 
 _SIN_TOL = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
-
 
 
 @njit(cache=True)
