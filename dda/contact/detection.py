@@ -300,9 +300,10 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
         # only across a convex corner of the block (a reflex one keeps both edges already)
         e, f = closed_edge[turned], cand.edge[turned_row]
         corner = np.where(f == topo.nxt[e], topo.nxt[e], e)
-        keep_turn = (~topo.reflex(x)[corner]) & (np.minimum(
-            sunk[blk[closed_vertex[turned]]], sunk[blk[e]]) > 0.0)
+        hysteresis = np.minimum(sunk[blk[closed_vertex[turned]]], sunk[blk[e]])
+        keep_turn = (~topo.reflex(x)[corner]) & (hysteresis > 0.0)
         turned, turned_row = turned[keep_turn], turned_row[keep_turn]
+        hysteresis = hysteresis[keep_turn]
     if len(lost) == 0 and len(turned) == 0:
         return cand
     back = np.concatenate([lost, turned])
@@ -319,7 +320,6 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
         new_gap = (cand.geometry.gap[turned_row] if cand.geometry is not None else
                    contact_geometry(x, cand.vertex[turned_row], cand.edge[turned_row],
                                     topo.nxt).gap)
-        hysteresis = np.minimum(sunk[blk[closed_vertex[turned]]], sunk[blk[closed_edge[turned]]])
         # only a sunk vertex (deeper behind the new edge, its least deep, than the sunk
         # depth): the narrow phase's entrance rule judges the others
         keep[t] &= over[t] & (-new_gap > hysteresis) & (new_gap - frame.gap[t] <= hysteresis)
