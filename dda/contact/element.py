@@ -61,6 +61,23 @@ class LawGroups:
             for k, v in law.initial_state(len(sel)).items():
                 history.setdefault(k, np.zeros(len(mask)))[sel] = v
 
+    def kernel_laws(self, m: int):
+        """The laws as per-contact numbers for the compiled OPEN-CLOSE pass
+        (:mod:`dda.kernels.open_close`): ``(kind, mu_static, mu_dynamic, cohesion, face)``,
+        or None when a law has none (a law written in numpy, a subclass of a built-in one).
+        ``face`` keys a face-judged contact's face within its law (-1 elsewhere)."""
+        kind = np.zeros(m, dtype=np.int64)
+        mu_s, mu_d, cohesion = np.zeros(m), np.zeros(m), np.zeros(m)
+        face = np.full(m, -1, dtype=np.int64)
+        for g, (law, idx) in enumerate(self.groups):
+            numbers = law._kernel_parameters()
+            if numbers is None:
+                return None
+            kind[idx], mu_s[idx], mu_d[idx], cohesion[idx] = numbers
+            if law.uses_faces:
+                face[idx] = self.faces.index[idx] * len(self.groups) + g
+        return kind, mu_s, mu_d, cohesion, face
+
     def _select(self, history, law, idx):
         return {k: history[k][idx] for k in law.history_fields()}
 
@@ -219,6 +236,12 @@ class ContactElement:
         """Shear force and history of the contacts in ``where`` locked on their elastic
         branch (:meth:`dda.contact.FrictionLaw.stick`): legacy DDA's stick spring."""
         return self.laws.stick(history, delta_g_s, self.shear_penalty, where)
+
+    @cached_property
+    def kernel_laws(self):
+        """The contacts' laws for the compiled OPEN-CLOSE pass, or None
+        (:meth:`LawGroups.kernel_laws`)."""
+        return self.laws.kernel_laws(len(self))
 
     def legacy_trial(self, history, delta_g_s, t_n, state):
         """Legacy DDA's end of a step: sticking contacts keep their spring (no yield check:

@@ -14,6 +14,7 @@ import numpy as np
 
 from dda._checks import finite_number
 from dda.kernels.friction import coulomb_return_map, transition_return_map
+from dda.kernels.open_close import COULOMB, TRANSITION, TRANSITION_FACE
 
 __all__ = ["FrictionLaw", "FrictionTrial", "CoulombLike", "CoulombSingle",
            "StaticDynamicTransition"]
@@ -115,6 +116,12 @@ class FrictionLaw(ABC):
         t_s = shear_penalty * state["g_se"]
         return FrictionTrial(t_s=t_s, slipping=np.zeros(len(t_s), dtype=bool),
                              strength=np.full(len(t_s), np.inf), state=state)
+
+    def _kernel_parameters(self):
+        """``(kind, mu_static, mu_dynamic, cohesion)`` for the compiled OPEN-CLOSE pass
+        (:mod:`dda.kernels.open_close`), or None: only a built-in law of its own class has
+        them (a subclass or a law written in numpy takes the numpy iteration)."""
+        return None
 
     def trial_history(self, trial: FrictionTrial) -> dict[str, np.ndarray]:
         """The history a trial leaves: what the contact carries into the next step if the
@@ -266,6 +273,11 @@ class CoulombSingle(CoulombLike):
     def strength_slope(self, t_n, length, history=None):
         return self.mu
 
+    def _kernel_parameters(self):
+        if type(self) is not CoulombSingle:
+            return None
+        return COULOMB, self.mu, self.mu, self.cohesion
+
     def _compiled_return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces):
         if type(self) is not CoulombSingle:
             return None
@@ -400,6 +412,12 @@ class StaticDynamicTransition(CoulombLike):
 
     def updated_history(self, history, slipping):
         return {"sliding": slipping.astype(float)}
+
+    def _kernel_parameters(self):
+        if type(self) is not StaticDynamicTransition:
+            return None
+        kind = TRANSITION_FACE if self.uses_faces else TRANSITION
+        return kind, self.mu_static, self.mu_dynamic, 0.0
 
     def _compiled_return_map(self, committed, delta_g_s, t_n, shear_penalty, length, faces):
         if type(self) is not StaticDynamicTransition:

@@ -87,6 +87,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda.contact.contacts import OPEN, SLIP, STICK
+from dda.contact.tangent import SPRING_TERMS
+from dda.kernels.open_close import pass_judge, pass_loads
+from dda.kernels.pair_stiffness import PairStiffness
+from dda.profiling import section
 from dda.solvers.base import StepProblem
 from dda.solvers.linear import SingularSystemError, assemble_and_solve
 
@@ -107,6 +111,9 @@ LAG_RELAX_AFTER = 6
 # legacy DDA: a pass whose state changes each move less force than this fraction of the largest
 # normal force on the lighter loaded of the contact's blocks counts as settled (module docstring)
 SETTLE_BAND = 1e-2
+#: the built-in laws' passes run compiled (:mod:`dda.kernels.open_close`; False: the numpy
+#: iteration for every law, the reference the compiled one is tested against)
+COMPILED_PASSES = True
 #: None, or a list that gets, per pass, (closing, opening, stick-slip switches, lagging sliding
 #: contacts): what kept the iteration going (benchmarks/stacks.py reads it)
 PASS_LOG = None
@@ -151,6 +158,9 @@ def open_close(problem: StepProblem, explicit: bool,
         return _without_contacts(problem)
     gap_tol = round_off_gap(el)
     history, t_stick, state, held = _start(el, explicit, gap_tol)
+    if COMPILED_PASSES and PASS_LOG is None and el.kernel_laws is not None:
+        return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
+                                settle_friction, band)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -198,6 +208,56 @@ def open_close(problem: StepProblem, explicit: bool,
         seen.add(new_state.tobytes())
         t_n_lag, lag_error = _next_lag(t_n, t_n_lag, lag_error, passes)
         state, dgs_prev = new_state, dgs
+    return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
+
+
+def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle_friction,
+                     band) -> OpenCloseResult:
+    """The iteration of :func:`open_close` with the built-in laws' compiled passes
+    (:mod:`dda.kernels.open_close`): the same rules in the same order, the same results."""
+    m = len(el)
+    f64 = np.float64
+    laws = el.kernel_laws
+    g_se = np.ascontiguousarray(history["g_se"], dtype=f64)
+    sliding = np.ascontiguousarray(history.get("sliding", np.zeros(m)), dtype=f64)
+    pn, ps, length, gap0, e_row, i_row, t_stick = (
+        np.ascontiguousarray(a, dtype=f64) for a in (
+            el.normal_penalty, el.shear_penalty, el.length, el.gap0, el.e_row, el.i_row,
+            t_stick))
+    bj, bk = (np.asarray(b, dtype=np.int64) for b in (el.bj, el.bk))
+    free = np.asarray(problem.free, dtype=np.bool_)
+    t_n_lag = np.array(el.contacts.t_n, dtype=f64)
+    dgs_prev = np.zeros(m)
+    state = np.asarray(state, dtype=np.int8)
+    seen = {state.tobytes()}
+    flips = np.zeros(m, dtype=np.int64)
+    pinned = np.zeros(m, dtype=bool)
+    lag_error = np.zeros(m)
+    rules = (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
+    for passes in range(1, problem.max_open_close + 1):
+        with section("return_map"):
+            t_slip, weights, f = pass_loads(state, *laws, g_se, sliding, dgs_prev, t_n_lag,
+                                            ps, length, gap0, pn, t_stick, e_row, i_row)
+        k = PairStiffness.checked_by_caller(el._spring_rows, SPRING_TERMS, weights)
+        try:
+            d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
+                                   el.bk, k, f, problem.d_known, problem.pattern,
+                                   factor=problem.factor(symmetric=True))
+        except SingularSystemError as exc:
+            return OpenCloseResult(False, passes, f"singular system: {exc}")
+        gap, dgs = el.linear_gaps(d)
+        with section("return_map"):
+            new_state, t_n, done, friction_settled, next_lag, lag_error = pass_judge(
+                state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned, gap_tol,
+                pn, ps, length, *laws, g_se, sliding, bj, bk, free, settle_friction,
+                float(band), passes, *rules)
+        if done:
+            return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
+                                   friction_settled)
+        if new_state.tobytes() in seen and not np.array_equal(new_state, state):
+            new_state = _single_switch(state, new_state, gap)
+        seen.add(new_state.tobytes())
+        state, dgs_prev, t_n_lag = new_state, dgs, next_lag
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
 
 

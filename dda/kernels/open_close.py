@@ -1,0 +1,261 @@
+"""Compiled OPEN-CLOSE pass of the built-in Coulomb laws (:mod:`dda.solvers.open_close`).
+
+On a small scene a pass of the numpy iteration is some hundred small array operations and three
+return maps through the law interface (the 2-block incline of ``benchmarks/small_step.py``:
+about 200 us a pass, the linear solve 15 of them). Where every contact's law is a built-in
+:class:`dda.contact.CoulombSingle` or :class:`dda.contact.StaticDynamicTransition` (their own
+class, not a subclass), a pass is instead two kernel calls around the linear solve:
+
+- :func:`pass_loads`: the friction load of the sliding contacts from the lagged normal force,
+  and legacy DDA's springs (:func:`dda.kernels.pair_stiffness.legacy_springs`);
+- :func:`pass_judge`: the states the pass's gaps ask for, the lagged-force and cycle rules, the
+  settle test with the settle band, and the next pass's lagged normal force.
+
+Both do the arithmetic of the numpy iteration contact by contact in the same order, and the
+return maps are those of :mod:`dda.kernels.friction` (which the built-in laws use), so the
+iteration takes the same decisions and gives the same bits (``tests/test_open_close_kernel.py``
+runs scenes both ways). A law written in numpy, or a subclass of a built-in one, keeps the numpy
+iteration.
+
+The laws reach the kernels as per-contact numbers: ``kind`` (``COULOMB``, ``TRANSITION`` judged
+contact by contact, ``TRANSITION_FACE`` judged by faces), the static and dynamic friction
+coefficients, the cohesion, and the key of the face a face-judged contact sums over (faces are
+summed within one law, as :class:`dda.contact.element.LawGroups` does; -1 elsewhere).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from dda.kernels.pair_stiffness import legacy_springs
+
+__all__ = ["COULOMB", "TRANSITION", "TRANSITION_FACE", "law_forces", "pass_loads",
+           "pass_judge"]
+
+COULOMB, TRANSITION, TRANSITION_FACE = 0, 1, 2
+_OPEN, _STICK, _SLIP = 0, 1, 2
+
+
+@njit(cache=True, inline="always")
+def _np_min(a, b):
+    """``numpy.minimum`` of two floats (which keeps the second on a tie: -0.0 against 0.0)."""
+    return a if (a < b or a != a) else b
+
+
+@njit(cache=True, inline="always")
+def _np_max(a, b):
+    """``numpy.maximum`` of two floats."""
+    return a if (a > b or a != a) else b
+
+
+@njit(cache=True)
+def law_forces(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps, length, where):
+    """Shear force and slipping flag of the return map of every contact in ``where`` (zero
+    force and not slipping elsewhere), from its committed ``g_se`` (and ``sliding``, the
+    transition law's history).
+
+    ``COULOMB``: ``S = c l_c + max(-t_n, 0) tan(phi)``, a trial ``p_s (g_se + dg_s)`` above
+    it returned to it (:func:`dda.kernels.friction.coulomb_return_map`). ``TRANSITION``: the
+    check against ``|t_n| tan(phi_d)`` for a contact sliding at the step's start, else
+    ``|t_n| tan(phi_s)``, a slip returned to ``|t_n| tan(phi_d)``; ``TRANSITION_FACE``: a
+    sticking contact slips when its face's summed trial force exceeds the face's summed
+    strength, over the face's contacts in ``where``
+    (:func:`dda.kernels.friction.transition_return_map`).
+    """
+    m = dgs.shape[0]
+    t_s = np.zeros(m)
+    slipping = np.zeros(m, dtype=np.bool_)
+    t_trial = np.zeros(m)
+    strength = np.zeros(m)
+    dynamic = np.zeros(m)
+    n_faces = 0
+    for i in range(m):
+        if not where[i]:
+            continue
+        t_trial[i] = ps[i] * (g_se[i] + dgs[i])
+        if kind[i] == COULOMB:
+            strength[i] = cohesion[i] * length[i] + max(-t_n[i], 0.0) * mu_s[i]
+            dynamic[i] = strength[i]
+        else:
+            pressure = max(-t_n[i], 0.0)
+            dynamic[i] = pressure * mu_d[i]
+            strength[i] = dynamic[i] if sliding[i] > 0.5 else pressure * mu_s[i]
+            if kind[i] == TRANSITION_FACE:
+                n_faces = max(n_faces, face[i] + 1)
+    carried = np.zeros(n_faces)
+    held = np.zeros(n_faces)
+    if n_faces:
+        for i in range(m):
+            if where[i] and kind[i] == TRANSITION_FACE:
+                c = t_trial[i]
+                if sliding[i] > 0.5:
+                    c = min(max(c, -dynamic[i]), dynamic[i])
+                carried[face[i]] += c
+                held[face[i]] += strength[i]
+    for i in range(m):
+        if not where[i]:
+            continue
+        if kind[i] == TRANSITION_FACE and not sliding[i] > 0.5:
+            slipping[i] = abs(carried[face[i]]) > held[face[i]]
+        elif kind[i] == TRANSITION_FACE:
+            slipping[i] = abs(t_trial[i]) > dynamic[i]
+        else:
+            slipping[i] = abs(t_trial[i]) > strength[i]
+        t_s[i] = dynamic[i] * np.sign(t_trial[i]) if slipping[i] else t_trial[i]
+    return t_s, slipping
+
+
+@njit(cache=True)
+def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev, t_n_lag, ps,
+               length, gap0, pn, t_stick, e_row, i_row):
+    """A pass's friction loads and springs: ``t_slip`` (the return map's force of the sliding
+    contacts from the last pass's shear increment and the lagged normal force, evaluated on
+    every closed contact as the numpy iteration does), and legacy DDA's spring weights and
+    forces (:func:`dda.kernels.pair_stiffness.legacy_springs`)."""
+    m = state.shape[0]
+    closed = np.empty(m, dtype=np.bool_)
+    for i in range(m):
+        closed[i] = state[i] != _OPEN
+    t_s, _ = law_forces(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev, t_n_lag,
+                        ps, length, closed)
+    t_slip = np.zeros(m)
+    for i in range(m):
+        if state[i] == _SLIP:
+            t_slip[i] = t_s[i]
+    weights, force = legacy_springs(state, gap0, pn, ps, t_stick, t_slip, e_row, i_row)
+    return t_slip, weights, force
+
+
+@njit(cache=True)
+def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned, gap_tol, pn,
+               ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj, bk, free,
+               settle_friction, band, passes, rtol, floor, cycle_tension, relax_after):
+    """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
+
+    Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error)``: the states
+    the pass asks for (after the cycle rule), its normal forces, whether the iteration has
+    settled, whether the stick and slip states settled too, and the lagged normal force of
+    the next pass with this pass's lag error. ``flips`` and ``pinned`` change in place.
+    """
+    m = state.shape[0]
+    new_state = np.empty(m, dtype=np.int8)
+    t_n = np.empty(m)
+    check = np.empty(m, dtype=np.bool_)
+    # the states the pass's gaps ask for; within round-off of zero a contact keeps its state
+    for i in range(m):
+        noise = abs(gap[i]) <= gap_tol[i]
+        closed = gap[i] < -gap_tol[i] or (noise and state[i] != _OPEN)
+        if closed:
+            t_n[i] = _np_min(pn[i] * gap[i], 0.0)
+            new_state[i] = _STICK if state[i] == _OPEN else state[i]
+        else:
+            t_n[i] = 0.0
+            new_state[i] = _OPEN
+        check[i] = closed and not held[i] and not noise
+    t_ret, slipping = law_forces(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n,
+                                 ps, length, check)
+    for i in range(m):
+        if check[i]:
+            # a slip that reverses against the friction load of this pass sticks
+            reversed_ = state[i] == _SLIP and np.sign(t_ret[i]) != np.sign(t_slip[i])
+            new_state[i] = _SLIP if slipping[i] and not reversed_ else _STICK
+    # the lagged normal force, and the cycle rule
+    largest = 0.0
+    for i in range(m):
+        largest = _np_max(largest, abs(t_n[i]))
+    lag_ok = np.empty(m, dtype=np.bool_)
+    for i in range(m):
+        lag_ok[i] = abs(t_n[i] - t_n_lag[i]) <= rtol * _np_max(
+            abs(t_n[i]), abs(t_n_lag[i])) + floor * largest
+        if (flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN
+                and pn[i] * gap[i] <= cycle_tension * largest):
+            new_state[i] = state[i]
+            pinned[i] = True
+        lag_ok[i] = lag_ok[i] or (pinned[i] and gap[i] >= 0.0)
+        if (state[i] != _OPEN) != (new_state[i] != _OPEN):
+            flips[i] += 1
+    settled = True
+    friction_settled = True
+    for i in range(m):
+        if new_state[i] != state[i]:
+            friction_settled = False
+        if settle_friction:
+            settled = settled and new_state[i] == state[i]
+        else:
+            settled = settled and (new_state[i] != _OPEN) == (state[i] != _OPEN)
+    lag_settled = _lag_all(lag_ok, state)
+    if band != 0.0 and not (settled and lag_settled):
+        local = _local_force(t_n, bj, bk, free, band)
+        for i in range(m):
+            lag_ok[i] = lag_ok[i] or _np_max(abs(t_n[i]), abs(t_n_lag[i])) <= local[i]
+        if not settled:
+            settled = _negligible(state, new_state, gap, dgs, t_n, t_slip, pn, ps, length,
+                                  kind, mu_s, mu_d, cohesion, face, g_se, sliding,
+                                  settle_friction, local)
+        lag_settled = _lag_all(lag_ok, state)
+    done = settled and lag_settled
+    next_lag = t_n.copy()
+    error = np.empty(m)
+    for i in range(m):
+        error[i] = t_n[i] - t_n_lag[i]
+        if passes >= relax_after and error[i] * lag_error[i] < 0.0:
+            next_lag[i] = 0.5 * (t_n[i] + t_n_lag[i])
+    return new_state, t_n, done, friction_settled, next_lag, error
+
+
+@njit(cache=True)
+def _lag_all(lag_ok, state):
+    for i in range(state.shape[0]):
+        if not (lag_ok[i] or state[i] != _SLIP):
+            return False
+    return True
+
+
+@njit(cache=True)
+def _local_force(t_n, bj, bk, free, band):
+    """``band`` times the largest normal force on either block of each contact, the smaller
+    of the two (a block whose motion is known does not count)."""
+    largest = np.zeros(free.shape[0])
+    for i in range(t_n.shape[0]):
+        largest[bj[i]] = _np_max(largest[bj[i]], abs(t_n[i]))
+    for i in range(t_n.shape[0]):
+        largest[bk[i]] = _np_max(largest[bk[i]], abs(t_n[i]))
+    for b in range(free.shape[0]):
+        if not free[b]:
+            largest[b] = np.inf
+    local = np.empty(t_n.shape[0])
+    for i in range(t_n.shape[0]):
+        local[i] = band * _np_min(largest[bj[i]], largest[bk[i]])
+    return local
+
+
+@njit(cache=True)
+def _negligible(state, new_state, gap, dgs, t_n, t_slip, pn, ps, length, kind, mu_s, mu_d,
+                cohesion, face, g_se, sliding, settle_friction, limit):
+    """Every changed contact moved less force than ``limit`` (the numpy iteration's
+    ``_negligible_changes``)."""
+    m = state.shape[0]
+    changed = np.zeros(m, dtype=np.bool_)
+    switched = np.zeros(m, dtype=np.bool_)
+    any_switched = False
+    for i in range(m):
+        was, now = state[i] != _OPEN, new_state[i] != _OPEN
+        changed[i] = (new_state[i] != state[i]) if settle_friction else (was != now)
+        switched[i] = changed[i] and was and now
+        any_switched = any_switched or switched[i]
+    t_map = np.zeros(m)
+    if any_switched:
+        t_map, _ = law_forces(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps,
+                              length, switched)
+    for i in range(m):
+        if not changed[i]:
+            continue
+        if switched[i]:
+            used = ps[i] * (g_se[i] + dgs[i]) if state[i] == _STICK else t_slip[i]
+            error = abs(used - t_map[i])
+        else:
+            error = pn[i] * abs(gap[i])
+        if not error <= limit[i]:
+            return False
+    return True
