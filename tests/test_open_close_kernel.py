@@ -7,12 +7,11 @@ import numpy as np
 import pytest
 
 import dda
-from dda.contact import CoulombSingle, JointMaterial, StaticDynamicTransition
+from dda.contact import CoulombSingle, JointMaterial, StaticDynamicTransition, element
 from dda.contact.element import LawGroups
 from dda.contact.faces import Faces
 from dda.kernels.open_close import law_forces
 from dda.materials import LinearElastic
-from dda.solvers import open_close
 from tests.conftest import box
 from tests.stability import scenes as S
 
@@ -87,7 +86,7 @@ CASES = {
 def test_compiled_passes_give_the_numpy_iterations_bits(case, solver, monkeypatch):
     runs = []
     for compiled in (False, True):
-        monkeypatch.setattr(open_close, "COMPILED_PASSES", compiled)
+        monkeypatch.setattr(element, "KERNEL_LAWS", compiled)
         scene, dt, duration = CASES[case]()
         sim = dda.Simulation(scene, dt=dt, solver=solver())
         result = sim.run(duration, progress=False)
@@ -101,3 +100,29 @@ def test_compiled_passes_give_the_numpy_iterations_bits(case, solver, monkeypatc
     np.testing.assert_array_equal(a.contacts.t_s, b.contacts.t_s)
     for key, value in a.contacts.history.items():
         np.testing.assert_array_equal(value, b.contacts.history[key], err_msg=key)
+
+
+def test_round_off_gaps_are_numpys():
+    from dda.kernels.open_close import round_off_gaps
+
+    rng = np.random.default_rng(3)
+    p1 = rng.normal(0.0, 1.0, (500, 2)) * 10.0 ** rng.integers(-6, 7, (500, 2))
+    p2 = rng.normal(0.0, 1.0, (500, 2)) * 10.0 ** rng.integers(-6, 7, (500, 2))
+    length = rng.random(500)
+    eps64 = 64.0 * np.finfo(float).eps
+    expected = np.maximum(1e-12 * length,
+                          eps64 * np.maximum(np.abs(p1).max(axis=1), np.abs(p2).max(axis=1)))
+    np.testing.assert_array_equal(round_off_gaps(p1, p2, length, 1e-12, eps64), expected)
+
+
+def test_kept_patterns_compare_keys_by_value():
+    from dda.solvers.sparse_factor import FactorSet
+
+    built = []
+    fs = FactorSet()
+    key = (np.array([True, False]), np.array([0, 1]), None)
+    first = fs.kept("p", key, lambda: built.append(1) or "a")
+    assert fs.kept("p", (key[0].copy(), key[1].copy(), None), lambda: "b") == first
+    assert fs.kept("p", (key[0], np.array([0, 2]), None), lambda: "c") == "c"
+    assert fs.kept("p", (key[0], np.array([0.0, 2.0]), None), lambda: "d") == "c"  # by value
+    assert fs.kept("p", (key[0], np.array([0, 2]), np.array([1])), lambda: "e") == "e"

@@ -24,10 +24,21 @@ from dda.contact.kinematics import (
     tributary_length,
 )
 from dda.contact.tangent import SPRING_TERMS, consistent_tangent
+from dda.kernels.open_close import (
+    as_float64,
+    kernel_history,
+    kernel_history_dict,
+    law_response,
+)
 from dda.kernels.pair_stiffness import PairStiffness, legacy_springs
 from dda.profiling import section
 
-__all__ = ["ContactElement", "LawGroups"]
+__all__ = ["ContactElement", "LawGroups", "KERNEL_LAWS"]
+
+#: the built-in laws take the compiled paths of :mod:`dda.kernels.open_close` (OPEN-CLOSE's
+#: passes, legacy DDA's step end, the fully implicit method's contact response); False: the
+#: numpy paths every law takes, the reference the compiled ones are tested against
+KERNEL_LAWS = True
 
 
 @dataclass
@@ -66,6 +77,16 @@ class LawGroups:
         (:mod:`dda.kernels.open_close`): ``(kind, mu_static, mu_dynamic, cohesion, face)``,
         or None when a law has none (a law written in numpy, a subclass of a built-in one).
         ``face`` keys a face-judged contact's face within its law (-1 elsewhere)."""
+        if len(self.groups) == 1:  # one law: no scatter
+            law = self.groups[0][0]
+            numbers = law._kernel_parameters()
+            if numbers is None:
+                return None
+            kind = np.full(m, numbers[0], dtype=np.int64)
+            mu_s, mu_d, cohesion = (np.full(m, float(v)) for v in numbers[1:])
+            face = (np.asarray(self.faces.index, dtype=np.int64) if law.uses_faces
+                    else np.full(m, -1, dtype=np.int64))
+            return kind, mu_s, mu_d, cohesion, face
         kind = np.zeros(m, dtype=np.int64)
         mu_s, mu_d, cohesion = np.zeros(m), np.zeros(m), np.zeros(m)
         face = np.full(m, -1, dtype=np.int64)
@@ -239,9 +260,17 @@ class ContactElement:
 
     @cached_property
     def kernel_laws(self):
-        """The contacts' laws for the compiled OPEN-CLOSE pass, or None
-        (:meth:`LawGroups.kernel_laws`)."""
-        return self.laws.kernel_laws(len(self))
+        """The contacts' laws for the compiled OPEN-CLOSE pass (:meth:`LawGroups.kernel_laws`),
+        or None: a law without a kernel, or history fields the kernels do not keep."""
+        if not KERNEL_LAWS:
+            return None
+        fields = set(self.contacts.history)
+        if not ({"g_se", "slip"} <= fields <= {"g_se", "slip", "sliding"}):
+            return None
+        laws = self.laws.kernel_laws(len(self))
+        if laws is not None and "sliding" not in fields and np.any(laws[0] != 0):
+            return None
+        return laws
 
     def legacy_trial(self, history, delta_g_s, t_n, state):
         """Legacy DDA's end of a step: sticking contacts keep their spring (no yield check:
@@ -300,7 +329,10 @@ class ContactElement:
     @cached_property
     def _spring_rows(self) -> np.ndarray:
         """(m, 2, 12) the rows E and I of legacy DDA's springs (fixed within the step)."""
-        return np.ascontiguousarray(np.stack([self.e_row, self.i_row], axis=1), dtype=np.float64)
+        rows = np.empty((len(self.e_row), 2, 12))
+        rows[:, 0] = self.e_row
+        rows[:, 1] = self.i_row
+        return rows
 
     def response(self, d: np.ndarray) -> ContactResponse:
         """Contact forces and consistent tangent at the trial increments d (METHOD.md s. 3-4).
@@ -329,8 +361,17 @@ class ContactElement:
         pn, ps = self.normal_penalty, self.shear_penalty
         t_n = np.where(closed, pn * kin.gap, 0.0)
         dgs = kin.shear - self.shear0
-        t_s, slipping, history, (kss, ksn) = self.laws.return_map(  # the law's tangent too
-            self.contacts.history, dgs, t_n, ps, self.length, where=closed, normal_penalty=pn)
+        if self.kernel_laws is not None:
+            with section("return_map"):
+                t_s, slipping, g_se, slip, sliding, kss, ksn = law_response(
+                    *self.kernel_laws, *kernel_history(self.contacts.history, len(self)),
+                    as_float64(dgs), as_float64(t_n), as_float64(ps), as_float64(pn),
+                    as_float64(self.length), closed)
+            history = kernel_history_dict(self.contacts.history, g_se, slip, sliding)
+        else:
+            t_s, slipping, history, (kss, ksn) = self.laws.return_map(  # with the tangent
+                self.contacts.history, dgs, t_n, ps, self.length, where=closed,
+                normal_penalty=pn)
         residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
         stiffness = consistent_tangent(kin, self.maps, self.contacts.xi0,
                                        np.where(closed, pn, 0.0), kss, ksn, t_n, t_s, closed)

@@ -30,11 +30,33 @@ from numba import njit
 
 from dda.kernels.pair_stiffness import legacy_springs
 
-__all__ = ["COULOMB", "TRANSITION", "TRANSITION_FACE", "law_forces", "pass_loads",
-           "pass_judge"]
+__all__ = ["COULOMB", "TRANSITION", "TRANSITION_FACE", "round_off_gaps", "law_forces",
+           "law_trial", "law_response", "step_start", "pass_loads", "pass_judge",
+           "legacy_end", "kernel_history", "kernel_history_dict", "as_float64"]
 
 COULOMB, TRANSITION, TRANSITION_FACE = 0, 1, 2
 _OPEN, _STICK, _SLIP = 0, 1, 2
+
+
+def kernel_history(history, m):
+    """The history arrays the kernels take: ``g_se``, ``slip``, ``sliding`` (zeros where
+    no law keeps it), float64 and contiguous."""
+    sliding = history.get("sliding")
+    return tuple(np.ascontiguousarray(a, dtype=np.float64) for a in (
+        history["g_se"], history["slip"], np.zeros(m) if sliding is None else sliding))
+
+
+def kernel_history_dict(history, g_se, slip, sliding) -> dict:
+    """The history dict of the kernels' arrays, with the fields ``history`` has."""
+    out = {"g_se": g_se, "slip": slip}
+    if "sliding" in history:
+        out["sliding"] = sliding
+    return out
+
+
+def as_float64(a):
+    """``a`` as the kernels take it: float64, contiguous (a view when it already is)."""
+    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 @njit(cache=True, inline="always")
@@ -50,10 +72,33 @@ def _np_max(a, b):
 
 
 @njit(cache=True)
+def round_off_gaps(p1, p2, length, relative, absolute):
+    """(m,) ``max(relative l, absolute max(|p1|, |p2|))``: the round-off of a contact's
+    linearized gap (:func:`dda.solvers.open_close.round_off_gap`), with ``max(|p|)`` over
+    both coordinates of the vertex ``p1`` and the edge's start ``p2``."""
+    m = length.shape[0]
+    out = np.empty(m)
+    for i in range(m):
+        a = _np_max(abs(p1[i, 0]), abs(p1[i, 1]))
+        b = _np_max(abs(p2[i, 0]), abs(p2[i, 1]))
+        out[i] = _np_max(relative * length[i], absolute * _np_max(a, b))
+    return out
+
+
+@njit(cache=True)
 def law_forces(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps, length, where):
     """Shear force and slipping flag of the return map of every contact in ``where`` (zero
-    force and not slipping elsewhere), from its committed ``g_se`` (and ``sliding``, the
-    transition law's history).
+    force and not slipping elsewhere): :func:`law_trial` without the trial force."""
+    t_s, slipping, _ = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n,
+                                 ps, length, where)
+    return t_s, slipping
+
+
+@njit(cache=True)
+def law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps, length, where):
+    """Shear force, slipping flag and trial force ``p_s (g_se + dg_s)`` of the return map of
+    every contact in ``where`` (zeros elsewhere), from its committed ``g_se`` (and
+    ``sliding``, the transition law's history).
 
     ``COULOMB``: ``S = c l_c + max(-t_n, 0) tan(phi)``, a trial ``p_s (g_se + dg_s)`` above
     it returned to it (:func:`dda.kernels.friction.coulomb_return_map`). ``TRANSITION``: the
@@ -103,7 +148,111 @@ def law_forces(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps, le
         else:
             slipping[i] = abs(t_trial[i]) > strength[i]
         t_s[i] = dynamic[i] * np.sign(t_trial[i]) if slipping[i] else t_trial[i]
-    return t_s, slipping
+    return t_s, slipping, t_trial
+
+
+@njit(cache=True)
+def _trial_history(i, t_s, slipping, t_trial, kind, ps, slip, g_out, slip_out, sliding_out):
+    """Contact ``i``'s history after its return map (:meth:`CoulombLike._numpy_return_map`):
+    ``g_se = t_s / p_s``, ``slip += |t_tr - t_s| / p_s``, and the transition law's
+    ``sliding`` flag."""
+    g_out[i] = t_s[i] / ps[i]
+    slip_out[i] = slip[i] + abs(t_trial[i] - t_s[i]) / ps[i]
+    if kind[i] != COULOMB:
+        sliding_out[i] = 1.0 if slipping[i] else 0.0
+
+
+@njit(cache=True)
+def law_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n, ps, pn,
+                 length, where):
+    """The return map of the contacts in ``where`` with the trial history and the consistent
+    tangent (:meth:`dda.contact.element.LawGroups.return_map` with ``normal_penalty``):
+    ``(t_s, slipping, g_se, slip, sliding, dt_s/dg_s, dt_s/dg_n)``; the others keep their
+    history, with zero force and tangent. The tangent is :meth:`CoulombLike.tangent`'s:
+    ``p_s`` sticking; ``-p_n mu_d sign(t_s)`` against the normal gap sliding (``mu_d`` the
+    sliding strength's slope, Coulomb's one angle)."""
+    m = dgs.shape[0]
+    t_s, slipping, t_trial = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs,
+                                       t_n, ps, length, where)
+    g_out, slip_out, sliding_out = g_se.copy(), slip.copy(), sliding.copy()
+    kss = np.zeros(m)
+    ksn = np.zeros(m)
+    for i in range(m):
+        if not where[i]:
+            continue
+        _trial_history(i, t_s, slipping, t_trial, kind, ps, slip, g_out, slip_out,
+                       sliding_out)
+        if slipping[i]:
+            slope = mu_s[i] if kind[i] == COULOMB else mu_d[i]
+            ksn[i] = -pn[i] * slope * np.sign(t_s[i])
+        else:
+            kss[i] = ps[i]
+    return t_s, slipping, g_out, slip_out, sliding_out, kss, ksn
+
+
+@njit(cache=True)
+def step_start(state, kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, t_n, ps,
+               length):
+    """The pull-back at a step's start: the return map, with no increment, of every contact
+    closed at the last step's end. Returns which of those exceed their strength and the
+    pulled-back history ``(g_se, slip, sliding)`` (the others' copied), and every contact's
+    stick spring force ``p_s g_se`` from it (:func:`dda.solvers.open_close._start`)."""
+    m = state.shape[0]
+    closed = np.empty(m, dtype=np.bool_)
+    for i in range(m):
+        closed[i] = state[i] != _OPEN
+    zero = np.zeros(m)
+    t_s, over, t_trial = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, zero,
+                                   t_n, ps, length, closed)
+    g_out, slip_out, sliding_out = g_se.copy(), slip.copy(), sliding.copy()
+    t_stick = np.empty(m)
+    for i in range(m):
+        if closed[i]:
+            _trial_history(i, t_s, over, t_trial, kind, ps, slip, g_out, slip_out,
+                           sliding_out)
+        t_stick[i] = ps[i] * (g_out[i] + zero[i])
+    return over, g_out, slip_out, sliding_out, t_stick
+
+
+@njit(cache=True)
+def legacy_end(state, gap, dgs, kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, pn,
+               ps, length):
+    """Legacy DDA's end of a step (:meth:`dda.contact.ContactElement.legacy_trial` and
+    ``trial_contacts``): normal forces ``min(p_n g_n, 0)`` of the closed contacts; a sticking
+    contact keeps its spring, ``t_s = p_s (g_se + dg_s)``; a sliding one is returned to its
+    strength (the return map judged over every closed contact); an open one gets the initial
+    history (zeros). Returns ``(t_n, t_s, g_se, slip, sliding)``; the ``sliding`` of a
+    Coulomb contact, which has none, is passed through."""
+    m = state.shape[0]
+    closed = np.empty(m, dtype=np.bool_)
+    t_n = np.zeros(m)
+    for i in range(m):
+        closed[i] = state[i] != _OPEN
+        if closed[i]:
+            t_n[i] = _np_min(pn[i] * gap[i], 0.0)
+    t_map, slipping, t_trial = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding,
+                                         dgs, t_n, ps, length, closed)
+    g_out, slip_out, sliding_out = g_se.copy(), slip.copy(), sliding.copy()
+    t_s = np.empty(m)
+    for i in range(m):
+        t_stick = 0.0
+        t_slip = 0.0
+        if state[i] == _STICK:
+            g_out[i] = g_se[i] + dgs[i]
+            t_stick = ps[i] * g_out[i]
+            if kind[i] != COULOMB:
+                sliding_out[i] = 0.0
+        elif state[i] == _SLIP:
+            _trial_history(i, t_map, slipping, t_trial, kind, ps, slip, g_out, slip_out,
+                           sliding_out)
+            t_slip = t_map[i]
+        else:
+            g_out[i] = 0.0
+            slip_out[i] = 0.0
+            if kind[i] != COULOMB:
+                sliding_out[i] = 0.0
+        t_s[i] = t_stick + t_slip
+    return t_n, t_s, g_out, slip_out, sliding_out
 
 
 @njit(cache=True)

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from dda.contact.contacts import OPEN
+from dda.contact.contacts import OPEN, ContactSet
+from dda.kernels.open_close import as_float64, kernel_history, kernel_history_dict, legacy_end
+from dda.profiling import section
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.open_close import open_close
 
@@ -41,7 +43,24 @@ class LegacyPullBack(NonlinearSolver):
         if len(el) == 0:
             return StepSolution(oc.d, el.contacts, True, oc.passes, oc.passes)
         state, gap, dgs, history, d = oc.state, oc.gap, oc.dgs, oc.history, oc.d
+        if el.kernel_laws is not None:
+            return StepSolution(d, _compiled_trial(el, state, gap, dgs, history), True,
+                                oc.passes, oc.passes)
         t_n = np.where(state != OPEN, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
         t_s, new_history = el.legacy_trial(history, dgs, t_n, state)
         trial = el.trial_contacts(state, t_n, t_s, new_history)
         return StepSolution(d, trial, True, oc.passes, oc.passes)
+
+
+def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
+    """The step's trial contacts from the built-in laws' kernel
+    (:func:`dda.kernels.open_close.legacy_end`: the same as ``legacy_trial`` and
+    ``trial_contacts``)."""
+    with section("return_map"):
+        t_n, t_s, g_se, slip, sliding = legacy_end(
+            state, as_float64(gap), as_float64(dgs), *el.kernel_laws,
+            *kernel_history(history, len(el)), as_float64(el.normal_penalty),
+            as_float64(el.shear_penalty), as_float64(el.length))
+    c = el.contacts
+    return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s,
+                      kernel_history_dict(history, g_se, slip, sliding))

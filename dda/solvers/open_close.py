@@ -88,7 +88,15 @@ import numpy as np
 
 from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.contact.tangent import SPRING_TERMS
-from dda.kernels.open_close import pass_judge, pass_loads
+from dda.kernels.open_close import (
+    as_float64,
+    kernel_history,
+    kernel_history_dict,
+    pass_judge,
+    pass_loads,
+    round_off_gaps,
+    step_start,
+)
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.profiling import section
 from dda.solvers.base import StepProblem
@@ -111,9 +119,6 @@ LAG_RELAX_AFTER = 6
 # legacy DDA: a pass whose state changes each move less force than this fraction of the largest
 # normal force on the lighter loaded of the contact's blocks counts as settled (module docstring)
 SETTLE_BAND = 1e-2
-#: the built-in laws' passes run compiled (:mod:`dda.kernels.open_close`; False: the numpy
-#: iteration for every law, the reference the compiled one is tested against)
-COMPILED_PASSES = True
 #: None, or a list that gets, per pass, (closing, opening, stick-slip switches, lagging sliding
 #: contacts): what kept the iteration going (benchmarks/stacks.py reads it)
 PASS_LOG = None
@@ -157,8 +162,9 @@ def open_close(problem: StepProblem, explicit: bool,
     if len(el) == 0:  # no contacts: one linear solve settles the step
         return _without_contacts(problem)
     gap_tol = round_off_gap(el)
-    history, t_stick, state, held = _start(el, explicit, gap_tol)
-    if COMPILED_PASSES and PASS_LOG is None and el.kernel_laws is not None:
+    compiled = el.kernel_laws is not None
+    history, t_stick, state, held = _start(el, explicit, gap_tol, compiled)
+    if compiled and PASS_LOG is None:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
                                 settle_friction, band)
     t_n_lag = el.contacts.t_n.copy()
@@ -218,8 +224,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     m = len(el)
     f64 = np.float64
     laws = el.kernel_laws
-    g_se = np.ascontiguousarray(history["g_se"], dtype=f64)
-    sliding = np.ascontiguousarray(history.get("sliding", np.zeros(m)), dtype=f64)
+    g_se, _, sliding = kernel_history(history, m)
     pn, ps, length, gap0, e_row, i_row, t_stick = (
         np.ascontiguousarray(a, dtype=f64) for a in (
             el.normal_penalty, el.shear_penalty, el.length, el.gap0, el.e_row, el.i_row,
@@ -354,18 +359,23 @@ def _without_contacts(problem) -> OpenCloseResult:
                            {k: v.copy() for k, v in el.contacts.history.items()})
 
 
-def _start(el, explicit, gap_tol):
+def _start(el, explicit, gap_tol, compiled=False):
     """The step's start: the pulled-back history, the stick springs' forces, the first
-    states, and the contacts spared the friction check (legacy's explicit rule)."""
+    states, and the contacts spared the friction check (legacy's explicit rule).
+    ``compiled``: the built-in laws' kernel (:func:`dda.kernels.open_close.step_start`)."""
     c = el.contacts
     m = len(el)
     closed0 = c.state != OPEN
-    zero = np.zeros(m)
-    # pull-back: last step's shear force above the strength is cut back to it here
-    _, over, history = el.friction(c.history, zero, c.t_n, where=closed0)
-    # the stick springs' force at the step's start, from the pulled-back history (every
-    # contact: one that closes during the step starts from its law's initial history)
-    t_stick, _ = el.stick(history, zero, where=np.ones(m, dtype=bool))
+    if compiled:
+        with section("return_map"):
+            over, history, t_stick = _compiled_start(el)
+    else:
+        zero = np.zeros(m)
+        # pull-back: last step's shear force above the strength is cut back to it here
+        _, over, history = el.friction(c.history, zero, c.t_n, where=closed0)
+        # the stick springs' force at the step's start, from the pulled-back history (every
+        # contact: one that closes during the step starts from its law's initial history)
+        t_stick, _ = el.stick(history, zero, where=np.ones(m, dtype=bool))
     state = c.state.copy()
     state[closed0 & over] = SLIP
     # legacy's explicit rule spares only the contacts that start the step sticking
@@ -374,6 +384,16 @@ def _start(el, explicit, gap_tol):
     # open, a stack of n touching blocks would need n passes to close from the bottom up
     state[(state == OPEN) & (el.gap0 <= gap_tol)] = STICK
     return history, t_stick, state, spared & closed0
+
+
+def _compiled_start(el):
+    """:func:`_start`'s pull-back and stick forces by the kernel: (over, history, t_stick)."""
+    c = el.contacts
+    hist = kernel_history(c.history, len(el))
+    over, g_se, slip, sliding, t_stick = step_start(
+        np.asarray(c.state, dtype=np.int8), *el.kernel_laws, *hist,
+        as_float64(c.t_n), as_float64(el.shear_penalty), as_float64(el.length))
+    return over, kernel_history_dict(c.history, g_se, slip, sliding), t_stick
 
 
 def _next_states(el, state, history, gap, dgs, t_slip, held, gap_tol):
@@ -403,8 +423,8 @@ def round_off_gap(element) -> np.ndarray:
     the gap is computed from when those are larger (a scene far from the origin).
     """
     g = element.geometry
-    coord = np.maximum(np.abs(g.p1).max(axis=1), np.abs(g.p2).max(axis=1))
-    return np.maximum(GAP_ROUND_OFF * g.length, 64.0 * np.finfo(float).eps * coord)
+    return round_off_gaps(as_float64(g.p1), as_float64(g.p2), as_float64(g.length),
+                          GAP_ROUND_OFF, 64.0 * np.finfo(float).eps)
 
 
 def _single_switch(state, proposed, gap):

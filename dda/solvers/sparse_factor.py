@@ -427,9 +427,7 @@ class FactorSet:
         contacts do."""
         last = self._kept.get(name)
         if last is not None and len(last[0]) == len(key) and all(
-                (a is None and b is None) or (a is not None and b is not None
-                                              and np.array_equal(a, b))
-                for a, b in zip(last[0], key, strict=True)):
+                _same_key(a, b) for a, b in zip(last[0], key, strict=True)):
             return last[1]
         made = build()
         self._kept[name] = (tuple(None if a is None else np.array(a, copy=True) for a in key),
@@ -448,3 +446,14 @@ class FactorSet:
         """(numeric factorizations, symbolic analyses) done so far."""
         return (sum(f.factorizations for f in self._factors.values()),
                 sum(f.analyses for f in self._factors.values()))
+
+
+def _same_key(a, b) -> bool:
+    """Whether two parts of a :meth:`FactorSet.kept` key are equal (arrays by value; integer
+    and boolean ones of one dtype by their bytes, the cheap test on a small scene's step)."""
+    if a is None or b is None:
+        return a is None and b is None
+    if a.dtype == b.dtype and a.dtype.kind in "biu":
+        return a.shape == b.shape and a.tobytes() == b.tobytes()
+    return bool(np.array_equal(a, b))
+
