@@ -126,3 +126,19 @@ def test_kept_patterns_compare_keys_by_value():
     assert fs.kept("p", (key[0], np.array([0, 2]), None), lambda: "c") == "c"
     assert fs.kept("p", (key[0], np.array([0.0, 2.0]), None), lambda: "d") == "c"  # by value
     assert fs.kept("p", (key[0], np.array([0, 2]), np.array([1])), lambda: "e") == "e"
+
+
+def test_compiled_passes_log_why_they_went_on(monkeypatch):
+    """benchmarks/stacks.py reads PASS_LOG: the compiled passes log what the numpy ones do."""
+    from dda.solvers import open_close
+    from tests.conftest import stack_scene
+
+    logs = []
+    for compiled in (False, True):
+        monkeypatch.setattr(element, "KERNEL_LAWS", compiled)
+        monkeypatch.setattr(open_close, "PASS_LOG", [])
+        sim = dda.Simulation(stack_scene(4), dt=1e-3, solver=dda.solvers.LegacyPullBack())
+        sim.run(0.02, progress=False)
+        logs.append(list(open_close.PASS_LOG))
+    assert len(logs[0]) > 20 and any(sum(row) for row in logs[0])
+    assert logs[0] == logs[1]

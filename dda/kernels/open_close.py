@@ -282,10 +282,11 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
                settle_friction, band, passes, rtol, floor, cycle_tension, relax_after):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
-    Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error)``: the states
-    the pass asks for (after the cycle rule), its normal forces, whether the iteration has
-    settled, whether the stick and slip states settled too, and the lagged normal force of
-    the next pass with this pass's lag error. ``flips`` and ``pinned`` change in place.
+    Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
+    the states the pass asks for (after the cycle rule), its normal forces, whether the
+    iteration has settled, whether the stick and slip states settled too, the lagged normal
+    force of the next pass with this pass's lag error, and which contacts' lagged force
+    counts as settled. ``flips`` and ``pinned`` change in place.
     """
     m = state.shape[0]
     new_state = np.empty(m, dtype=np.int8)
@@ -350,7 +351,7 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
         error[i] = t_n[i] - t_n_lag[i]
         if passes >= relax_after and error[i] * lag_error[i] < 0.0:
             next_lag[i] = 0.5 * (t_n[i] + t_n_lag[i])
-    return new_state, t_n, done, friction_settled, next_lag, error
+    return new_state, t_n, done, friction_settled, next_lag, error, lag_ok
 
 
 @njit(cache=True)

@@ -164,7 +164,7 @@ def open_close(problem: StepProblem, explicit: bool,
     gap_tol = round_off_gap(el)
     compiled = el.kernel_laws is not None
     history, t_stick, state, held = _start(el, explicit, gap_tol, compiled)
-    if compiled and PASS_LOG is None:
+    if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
                                 settle_friction, band)
     t_n_lag = el.contacts.t_n.copy()
@@ -252,10 +252,12 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         gap, dgs = el.linear_gaps(d)
         with section("return_map"):
-            new_state, t_n, done, friction_settled, next_lag, lag_error = pass_judge(
+            new_state, t_n, done, friction_settled, next_lag, lag_error, lag_ok = pass_judge(
                 state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned, gap_tol,
                 pn, ps, length, *laws, g_se, sliding, bj, bk, free, settle_friction,
                 float(band), passes, *rules)
+        if PASS_LOG is not None:
+            PASS_LOG.append(_why(state, new_state, lag_ok))
         if done:
             return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
                                    friction_settled)
