@@ -295,8 +295,8 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
         np.asarray(cand.vertex, dtype=np.int64), np.asarray(cand.edge, dtype=np.int64),
         np.asarray(cand.bk, dtype=np.int64), closed_vertex, closed_edge, blk, topo.nxt,
         topo.prv, n_blocks, np.ascontiguousarray(x, dtype=np.float64))
-    sunk = np.broadcast_to(np.asarray(sunk_depth, dtype=np.float64), (n_blocks,))
     if len(turned):
+        sunk = _per_block(sunk_depth, n_blocks)
         # only across a convex corner of the block (a reflex one keeps both edges already)
         e, f = closed_edge[turned], cand.edge[turned_row]
         corner = np.where(f == topo.nxt[e], topo.nxt[e], e)
@@ -489,6 +489,17 @@ def _expand_to_edges(vertex, kblock, offsets):
     return vertex[pid], edge
 
 
+def _per_block(value, n_blocks) -> np.ndarray:
+    """A number or an (n_blocks,) array as (n_blocks,) float64 (no copy of one that is)."""
+    value = np.asarray(value, dtype=np.float64)
+    if value.ndim == 0:
+        return np.full(n_blocks, float(value))
+    if value.shape != (n_blocks,):
+        raise ValueError(f"expected a number or {n_blocks} values per block, got shape "
+                         f"{value.shape}")
+    return np.ascontiguousarray(value)
+
+
 def narrow_phase(
     x: np.ndarray,
     topo: VertexTopology,
@@ -529,8 +540,7 @@ def narrow_phase(
         x, topo.offsets, topo.nxt, topo.prv, np.ascontiguousarray(pairs, dtype=np.int64),
         boxes, margin, cross < 0.0, cross > 1e-9 * scale, bisector,
         search_distance, penetration_limit,
-        np.ascontiguousarray(np.broadcast_to(sunk_depth, len(topo.offsets) - 1),
-                             dtype=np.float64))
+        _per_block(sunk_depth, len(topo.offsets) - 1))
     if len(vertex) == 0:
         return _empty_candidates(len(pairs))
     # the kernel gives each (vertex, block)'s edges in the order they were chosen in;

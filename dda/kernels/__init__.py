@@ -9,12 +9,16 @@
   the blocks' unknowns to the contact points, the tributary lengths;
 - :mod:`dda.kernels.friction`: the return maps of the built-in Coulomb laws (a law written in
   numpy, or a subclass of a built-in one, goes through the numpy path);
+- :mod:`dda.kernels.open_close`: with the built-in laws, OPEN-CLOSE's passes (two calls
+  around the linear solve), the step's pull-back, legacy DDA's step end and the fully
+  implicit method's contact response and tangent, the same decisions and bits as the numpy
+  iteration (``dda.contact.element.KERNEL_LAWS`` switches them off);
 - :mod:`dda.kernels.faces`: contacts grouped into faces;
 - :mod:`dda.kernels.geometry`: polygon integrals, the turn and bisector of every vertex;
 - :mod:`dda.kernels.forces`: the recorder's force sums per block pair.
 
-The kinematics, friction, faces, geometry and forces kernels give the numbers of the numpy
-code they replaced, to the bit (the tests compare them): on the few contacts of a small
+The kinematics, friction, OPEN-CLOSE, faces, geometry and forces kernels give the numbers of
+the numpy code they replaced, to the bit (the tests compare them): on the few contacts of a small
 scene numpy's per-call overhead, not the arithmetic, was the cost.
 
 The kernels compile on their first call (``cache=True``: once per machine, then loaded from
