@@ -75,3 +75,42 @@ def test_singular_system_is_reported():
         assemble_and_solve(block_k, np.ones((1, 6)), np.array([True]), np.zeros(0, int),
                            np.zeros(0, int), np.zeros((0, 12, 12)), np.zeros((0, 12)),
                            np.zeros((1, 6)))
+
+
+@pytest.mark.parametrize("reads_upper", [False, True])
+def test_a_kept_sparse_structure_serves_fewer_contacts(reads_upper):
+    """With a FactorSet the sparse structure of a step stands for the next one whose contacts
+    couple a subset of its block pairs (no new analysis), holding the pairs no longer in
+    contact as zeros: the same solution as a structure of its own. A new pair, or a
+    structure more than STRUCTURE_SLACK times too large, is built anew."""
+    from dda.kernels import PairStiffness
+    from dda.solvers.linear import STRUCTURE_SLACK, SystemPattern
+
+    rng = np.random.default_rng(7)
+    n_blocks = 80  # 474 unknowns: sparse
+    block_k, block_f, bj, bk, _, pair_f = chain(n_blocks, rng)
+    rows = rng.normal(size=(len(bj), 2, 12))
+    pair_k = PairStiffness(rows, [[0, 0], [1, 1]], rng.uniform(1.0, 2.0, (len(bj), 2)))
+    free = np.ones(n_blocks, dtype=bool)
+    free[0] = False
+    d_known = np.where(free[:, None], 0.0, rng.normal(size=(n_blocks, 6)))
+    cache = sparse_factor.FactorSet()
+    factor = cache.get(True) if reads_upper else None
+    first = SystemPattern(free, bj, bk, cache=cache)
+    assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, first,
+                       factor=factor)
+    keep = np.arange(len(bj)) % 5 != 0  # a fifth of the contacts are gone
+    sub = PairStiffness(rows[keep], [[0, 0], [1, 1]], pair_k.weights[keep])
+    later = SystemPattern(free, bj[keep], bk[keep], cache=cache)
+    assert later.indices is first.indices and later.nnz == first.nnz
+    d = assemble_and_solve(block_k, block_f, free, bj[keep], bk[keep], sub, pair_f[keep],
+                           d_known, later, factor=factor)
+    own = SystemPattern(free, bj[keep], bk[keep])
+    assert own.nnz < later.nnz
+    ref = assemble_and_solve(block_k, block_f, free, bj[keep], bk[keep], sub, pair_f[keep],
+                             d_known, own)
+    np.testing.assert_allclose(d, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
+    new_pair = SystemPattern(free, np.r_[bj, 3], np.r_[bk, 40], cache=cache)
+    assert new_pair.indices is not first.indices
+    few = int(len(bj) / (2 * STRUCTURE_SLACK))
+    assert SystemPattern(free, bj[:few], bk[:few], cache=cache).nnz < new_pair.nnz

@@ -434,6 +434,22 @@ class FactorSet:
                             made)
         return made
 
+    def superset(self, name: str, n: int, needed: np.ndarray, slack: float) -> np.ndarray:
+        """The sorted keys kept under ``name`` while they include every one of ``needed``
+        (sorted, unique) for the same ``n`` and number at most ``slack`` times as many; else
+        ``needed``, kept from now on. A sparse structure built on the keys
+        (:class:`dda.solvers.linear.SystemPattern`) then stands, and the solver's analysis of
+        it, while the contacts move among the block pairs it covers."""
+        last = self._kept.get("superset " + name)
+        if last is not None and last[0] == n and len(last[1]) <= slack * len(needed):
+            kept = last[1]
+            pos = np.searchsorted(kept, needed)
+            if len(needed) == 0 or (pos[-1] < len(kept)
+                                    and np.array_equal(kept[pos], needed)):
+                return kept
+        self._kept["superset " + name] = (n, needed)
+        return needed
+
     def get(self, symmetric: bool) -> SparseFactor:
         """The factorization holder for symmetric (or general) matrices."""
         f = self._factors.get(symmetric)
