@@ -6,11 +6,12 @@ into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``)
 thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
 shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 
-With these defaults (0.3 s) the run takes about 50 s on two cores (1,654 steps, 68 of them
-cut because OPEN-CLOSE did not settle in 30 passes) and the face blocks end 27 mm (median) and
-51 mm (most) from where they started relative to the base (1,566 steps, 53 cut, 24 / 42 mm
-before detection judged "sunk" corners by their own pair's blocks and kept faces shared
-corner on corner). The
+With these defaults (0.3 s) the run takes about 42 s on two cores (1,778 steps, 55 of them
+cut because OPEN-CLOSE did not settle in 30 passes) and the face blocks end 25.5 mm (median)
+and 51.3 mm (most) from where they started relative to the base (1,654 steps, 68 cut, 27 / 51
+mm before the sparse structure was kept from step to step, which changed the round-off of
+the solves; 1,566 steps, 53 cut, 24 / 42 mm before detection judged "sunk" corners by their
+own pair's blocks and kept faces shared corner on corner). The
 contacts settle only at a fraction of the 2e-3 s asked for (the contact period of a 1 x 1.6 m
 block is 1.8 ms, of the lightest block, 185 kg, 0.4 ms): the steps average 1.8e-4 s. Asked
 for dt 1.25e-4 the face moved 25 / 41 mm, for 6.25e-5, 30 / 60 mm (issue 19's third part).
@@ -18,18 +19,20 @@ The penalty (5e10 N/m, 540 times the lightest block's inertia at 2e-3 s) is stif
 ``dda.PenaltyWarning`` says so after 20 cuts.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``): blocks carry
-blocks here, so the penalty is twice the rock's Young's modulus, 2e10 N/m, at dt 2.4e-4 s
-(3 times the lightest block's inertia), for both solvers. After 0.3 s the face blocks moved
-25.8 / 41.7 mm (legacy, 30 s of CPU, 1,298 steps, 4 cut) and 27.1 / 43.6 mm (Newton, 47 s,
-1,389 steps, 8 cut). The penalty sweep behind that floor (legacy, 0.3 s, median / most): 55 /
-85 mm at 2.2e9 N/m (the rule without the floor; 57 / 89 and 61 / 107 mm at dt 3.6e-4 and
-1.8e-4: it is the penalty, not dt), 38 / 65 mm at 5e9, 31 / 42 mm at 1e10, 29 / 46 mm at 2e10,
-27 / 51 mm at 5e10: joints softer than the rock make the whole mass softer and its face moves
-further. 10 s of shaking under ``--auto``: 12.6 min of CPU (legacy, 42,482 steps, 8 cut)
-and 19.6 min (Newton, 42,598 steps, 18 cut). (Before the detection fixes of the session after
-issue 20's, the automatic run stopped at 0.09 s: detection lost faces where corners meet on
-continuous joints; without the floor it then ran 10 s in 4.3 (legacy) and 3.3 (Newton)
-minutes, its face 0.91 / 1.59 and 1.76 / 3.20 m out.)
+blocks here, so the penalty is twice the rock's Young's modulus, 2e10 N/m, at dt 2.4e-4 s (3
+times the lightest block's inertia), for both solvers. After 0.3 s the face blocks moved 26.5 /
+36.7 mm (legacy, 26 s of CPU, 1,298 steps, 4 cut) and 27.6 / 41.3 mm (Newton, 41 s, 1,389
+steps, 8 cut); before the sparse structure was kept from step to step, 25.8 / 41.7 and 27.1 /
+43.6 mm in the same steps: this slope is chaotic at the millimetre. The penalty sweep behind
+that floor (legacy, 0.3 s, median / most): 55 / 85 mm at 2.2e9 N/m (the rule without the floor;
+57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: it is the penalty, not dt), 38 / 65 mm at 5e9,
+31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10: joints softer than the rock make
+the whole mass softer and its face moves further. 10 s of shaking under ``--auto``: 12.6 min of
+CPU (legacy, 42,482 steps, 8 cut) and 19.6 min (Newton, 42,598 steps, 18 cut), measured before
+issue 19's seventh part made the 0.3 s runs 15-18% faster. (Before the detection fixes of the
+session after issue 20's, the automatic run stopped at 0.09 s: detection lost faces where
+corners meet on continuous joints; without the floor it then ran 10 s in 4.3 (legacy) and 3.3
+(Newton) minutes, its face 0.91 / 1.59 and 1.76 / 3.20 m out.)
 Through 10 s of shaking (``--duration 10``) the slope fails: legacy DDA took 12.9 minutes of
 CPU (27,009 steps, 828 cuts: 3.1%, 1.9 GB at its peak), and the face blocks ended 0.71 m
 (median) and 1.86 m (most) from where they started (issue 19's fifth part; not rerun since).
