@@ -7,7 +7,7 @@ about 200 us a pass, the linear solve 15 of them). Where every contact's law is 
 class, not a subclass), a pass is instead two kernel calls around the linear solve:
 
 - :func:`pass_loads`: the friction load of the sliding contacts from the lagged normal force,
-  and legacy DDA's springs (:func:`dda.kernels.pair_stiffness.legacy_springs`);
+  and legacy DDA's springs (:func:`legacy_springs`);
 - :func:`pass_judge`: the states the pass's gaps ask for, the lagged-force and cycle rules, the
   settle test with the settle band, and the next pass's lagged normal force.
 
@@ -28,11 +28,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from dda.kernels.pair_stiffness import legacy_springs
-
 __all__ = ["COULOMB", "TRANSITION", "TRANSITION_FACE", "round_off_gaps", "law_forces",
            "law_trial", "law_response", "step_start", "pass_loads", "pass_judge",
-           "legacy_end", "kernel_history", "kernel_history_dict", "as_float64"]
+           "legacy_end", "legacy_springs", "kernel_history", "kernel_history_dict",
+           "as_float64"]
 
 COULOMB, TRANSITION, TRANSITION_FACE = 0, 1, 2
 _OPEN, _STICK, _SLIP = 0, 1, 2
@@ -261,7 +260,7 @@ def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev,
     """A pass's friction loads and springs: ``t_slip`` (the return map's force of the sliding
     contacts from the last pass's shear increment and the lagged normal force, evaluated on
     every closed contact as the numpy iteration does), and legacy DDA's spring weights and
-    forces (:func:`dda.kernels.pair_stiffness.legacy_springs`)."""
+    forces (:func:`legacy_springs`)."""
     m = state.shape[0]
     closed = np.empty(m, dtype=np.bool_)
     for i in range(m):
@@ -409,3 +408,24 @@ def _negligible(state, new_state, gap, dgs, t_n, t_slip, pn, ps, length, kind, m
         if not error <= limit[i]:
             return False
     return True
+
+
+@njit(cache=True)
+def legacy_springs(state, gap0, normal_penalty, shear_penalty, t_stick, t_slip, e_row, i_row):
+    """Legacy DDA's springs of every contact (state 0 open, 1 stick, 2 slip): the weights
+    ``(k_n, k_s)`` of ``k_n E^T E + k_s I^T I`` and the force
+    ``-(k_n g_n0 E + t_s I)`` with ``t_s`` the stick spring's force or the friction load
+    (:meth:`dda.contact.ContactElement.legacy_contributions`, the same arithmetic)."""
+    m = state.shape[0]
+    weights = np.empty((m, 2))
+    force = np.empty((m, 12))
+    for c in range(m):
+        kn = normal_penalty[c] if state[c] != 0 else 0.0
+        ks = shear_penalty[c] if state[c] == 1 else 0.0
+        weights[c, 0] = kn
+        weights[c, 1] = ks
+        fn = kn * gap0[c]
+        fs = (t_stick[c] if state[c] == 1 else 0.0) + (t_slip[c] if state[c] == 2 else 0.0)
+        for j in range(12):
+            force[c, j] = -(fn * e_row[c, j] + fs * i_row[c, j])
+    return weights, force

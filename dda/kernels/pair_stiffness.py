@@ -14,7 +14,10 @@ assembly (:mod:`dda.kernels.assembly`) evaluates the entries where they are summ
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+# defined with the OPEN-CLOSE kernels that call it (numba renews a cached kernel when its own
+# file changes, not a helper's in another file)
+from dda.kernels.open_close import legacy_springs
 
 __all__ = ["PairStiffness", "legacy_springs"]
 
@@ -71,24 +74,3 @@ class PairStiffness:
             raise ValueError("PairStiffness: the (m, 12, 12) array is built on request")
         k = self.dense()
         return k if dtype is None else k.astype(dtype)
-
-
-@njit(cache=True)
-def legacy_springs(state, gap0, normal_penalty, shear_penalty, t_stick, t_slip, e_row, i_row):
-    """Legacy DDA's springs of every contact (state 0 open, 1 stick, 2 slip): the weights
-    ``(k_n, k_s)`` of ``k_n E^T E + k_s I^T I`` and the force
-    ``-(k_n g_n0 E + t_s I)`` with ``t_s`` the stick spring's force or the friction load
-    (:meth:`dda.contact.ContactElement.legacy_contributions`, the same arithmetic)."""
-    m = state.shape[0]
-    weights = np.empty((m, 2))
-    force = np.empty((m, 12))
-    for c in range(m):
-        kn = normal_penalty[c] if state[c] != 0 else 0.0
-        ks = shear_penalty[c] if state[c] == 1 else 0.0
-        weights[c, 0] = kn
-        weights[c, 1] = ks
-        fn = kn * gap0[c]
-        fs = (t_stick[c] if state[c] == 1 else 0.0) + (t_slip[c] if state[c] == 2 else 0.0)
-        for j in range(12):
-            force[c, j] = -(fn * e_row[c, j] + fs * i_row[c, j])
-    return weights, force

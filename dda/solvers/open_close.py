@@ -187,9 +187,7 @@ def open_close(problem: StepProblem, explicit: bool,
         t_slip = np.where(state == SLIP, t_slip, 0.0)
         k, f = el.legacy_contributions(state, t_stick, t_slip)
         try:
-            d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
-                                   el.bk, k, f, problem.d_known, problem.pattern,
-                                   factor=problem.factor(symmetric=True))
+            d = _solve_pass(problem, k, f)
         except SingularSystemError as exc:
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         gap, dgs = el.linear_gaps(d)
@@ -223,6 +221,14 @@ def open_close(problem: StepProblem, explicit: bool,
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
 
 
+def _solve_pass(problem, k, f):
+    """A pass's increments with the contacts' springs ``k`` and forces ``f``."""
+    el = problem.element
+    return assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj, el.bk, k,
+                              f, problem.d_known, problem.pattern,
+                              factor=problem.factor(symmetric=True))
+
+
 def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle_friction,
                      band) -> OpenCloseResult:
     """The iteration of :func:`open_close` with the built-in laws' compiled passes
@@ -251,9 +257,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
                                             ps, length, gap0, pn, t_stick, e_row, i_row)
         k = PairStiffness.checked_by_caller(el._spring_rows, SPRING_TERMS, weights)
         try:
-            d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj,
-                                   el.bk, k, f, problem.d_known, problem.pattern,
-                                   factor=problem.factor(symmetric=True))
+            d = _solve_pass(problem, k, f)
         except SingularSystemError as exc:
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         gap, dgs = el.linear_gaps(d)
