@@ -12,8 +12,9 @@ class, not a subclass), a pass is instead two kernel calls around the linear sol
   settle test with the settle band, and the next pass's lagged normal force.
 
 Both do the arithmetic of the numpy iteration contact by contact in the same order, and the
-return maps are those of :mod:`dda.kernels.friction` (which the built-in laws use), so the
-iteration takes the same decisions and gives the same bits (``tests/test_open_close_kernel.py``
+return maps are the built-in laws' own (:func:`law_trial`, which their ``return_map`` calls
+too, through :mod:`dda.kernels.friction`), so the iteration takes the same decisions and gives
+the same bits (``tests/test_open_close_kernel.py``
 runs scenes both ways). A law written in numpy, or a subclass of a built-in one, keeps the numpy
 iteration.
 
@@ -29,7 +30,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["COULOMB", "TRANSITION", "TRANSITION_FACE", "round_off_gaps", "law_forces",
-           "law_trial", "law_response", "step_start", "pass_loads", "pass_judge",
+           "law_trial", "law_return_map", "law_response", "step_start", "pass_loads", "pass_judge",
            "legacy_end", "legacy_springs", "kernel_history", "kernel_history_dict",
            "as_float64"]
 
@@ -88,24 +89,25 @@ def round_off_gaps(p1, p2, length, relative, absolute):
 def law_forces(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps, length, where):
     """Shear force and slipping flag of the return map of every contact in ``where`` (zero
     force and not slipping elsewhere): :func:`law_trial` without the trial force."""
-    t_s, slipping, _ = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n,
-                                 ps, length, where)
+    t_s, slipping, _, _ = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n,
+                                    ps, length, where)
     return t_s, slipping
 
 
 @njit(cache=True)
 def law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps, length, where):
-    """Shear force, slipping flag and trial force ``p_s (g_se + dg_s)`` of the return map of
-    every contact in ``where`` (zeros elsewhere), from its committed ``g_se`` (and
-    ``sliding``, the transition law's history).
+    """Shear force, slipping flag, trial force ``p_s (g_se + dg_s)`` and the strength it was
+    checked against, of the return map of every contact in ``where`` (zeros elsewhere), from
+    its committed ``g_se`` (and ``sliding``, the transition law's history). The built-in laws'
+    one implementation: their own return maps (:mod:`dda.kernels.friction`) come here too.
 
     ``COULOMB``: ``S = c l_c + max(-t_n, 0) tan(phi)``, a trial ``p_s (g_se + dg_s)`` above
-    it returned to it (:func:`dda.kernels.friction.coulomb_return_map`). ``TRANSITION``: the
+    it returned to it (:class:`dda.contact.CoulombSingle`). ``TRANSITION``: the
     check against ``|t_n| tan(phi_d)`` for a contact sliding at the step's start, else
     ``|t_n| tan(phi_s)``, a slip returned to ``|t_n| tan(phi_d)``; ``TRANSITION_FACE``: a
     sticking contact slips when its face's summed trial force exceeds the face's summed
-    strength, over the face's contacts in ``where``
-    (:func:`dda.kernels.friction.transition_return_map`).
+    strength, over the face's contacts in ``where`` (:class:`dda.contact.StaticDynamicTransition`;
+    a sliding contact's force counts at most its dynamic strength).
     """
     m = dgs.shape[0]
     t_s = np.zeros(m)
@@ -147,7 +149,7 @@ def law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs, t_n, ps, len
         else:
             slipping[i] = abs(t_trial[i]) > strength[i]
         t_s[i] = dynamic[i] * np.sign(t_trial[i]) if slipping[i] else t_trial[i]
-    return t_s, slipping, t_trial
+    return t_s, slipping, t_trial, strength
 
 
 @njit(cache=True)
@@ -162,6 +164,22 @@ def _trial_history(i, t_s, slipping, t_trial, kind, ps, slip, g_out, slip_out, s
 
 
 @njit(cache=True)
+def law_return_map(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n, ps,
+                   length):
+    """The return map of every contact with its trial history: ``(t_s, slipping, strength,
+    g_se, slip)`` (:meth:`CoulombLike._numpy_return_map`'s, to the bit)."""
+    m = dgs.shape[0]
+    where = np.ones(m, dtype=np.bool_)
+    t_s, slipping, t_trial, strength = law_trial(kind, mu_s, mu_d, cohesion, face, g_se,
+                                                 sliding, dgs, t_n, ps, length, where)
+    g_out, slip_out, sliding_out = np.empty(m), np.empty(m), np.empty(m)
+    for i in range(m):
+        _trial_history(i, t_s, slipping, t_trial, kind, ps, slip, g_out, slip_out,
+                       sliding_out)
+    return t_s, slipping, strength, g_out, slip_out
+
+
+@njit(cache=True)
 def law_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n, ps, pn,
                  length, where):
     """The return map of the contacts in ``where`` with the trial history and the consistent
@@ -171,8 +189,8 @@ def law_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n
     ``p_s`` sticking; ``-p_n mu_d sign(t_s)`` against the normal gap sliding (``mu_d`` the
     sliding strength's slope, Coulomb's one angle)."""
     m = dgs.shape[0]
-    t_s, slipping, t_trial = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs,
-                                       t_n, ps, length, where)
+    t_s, slipping, t_trial, _ = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding,
+                                          dgs, t_n, ps, length, where)
     g_out, slip_out, sliding_out = g_se.copy(), slip.copy(), sliding.copy()
     kss = np.zeros(m)
     ksn = np.zeros(m)
@@ -201,8 +219,8 @@ def step_start(state, kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, t_n
     for i in range(m):
         closed[i] = state[i] != _OPEN
     zero = np.zeros(m)
-    t_s, over, t_trial = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, zero,
-                                   t_n, ps, length, closed)
+    t_s, over, t_trial, _ = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding, zero,
+                                      t_n, ps, length, closed)
     g_out, slip_out, sliding_out = g_se.copy(), slip.copy(), sliding.copy()
     t_stick = np.empty(m)
     for i in range(m):
@@ -229,8 +247,8 @@ def legacy_end(state, gap, dgs, kind, mu_s, mu_d, cohesion, face, g_se, slip, sl
         closed[i] = state[i] != _OPEN
         if closed[i]:
             t_n[i] = _np_min(pn[i] * gap[i], 0.0)
-    t_map, slipping, t_trial = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding,
-                                         dgs, t_n, ps, length, closed)
+    t_map, slipping, t_trial, _ = law_trial(kind, mu_s, mu_d, cohesion, face, g_se, sliding,
+                                            dgs, t_n, ps, length, closed)
     g_out, slip_out, sliding_out = g_se.copy(), slip.copy(), sliding.copy()
     t_s = np.empty(m)
     for i in range(m):
