@@ -27,9 +27,9 @@ steps, 8 cut); before the sparse structure was kept from step to step, 25.8 / 41
 that floor (legacy, 0.3 s, median / most): 55 / 85 mm at 2.2e9 N/m (the rule without the floor;
 57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: it is the penalty, not dt), 38 / 65 mm at 5e9,
 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10: joints softer than the rock make
-the whole mass softer and its face moves further. 10 s of shaking under ``--auto``: 12.6 min of
-CPU (legacy, 42,482 steps, 8 cut) and 19.6 min (Newton, 42,598 steps, 18 cut), measured before
-issue 19's seventh part made the 0.3 s runs 15-18% faster. (Before the detection fixes of the
+the whole mass softer and its face moves further. 10 s of shaking under ``--auto``: 11.2 min of
+CPU (legacy, 42,498 steps, 12 cut) and 16.0 min (Newton, 42,590 steps, 16 cut); 12.6 and 19.6
+min before issue 19's seventh part. (Before the detection fixes of the
 session after issue 20's, the automatic run stopped at 0.09 s: detection lost faces where
 corners meet on continuous joints; without the floor it then ran 10 s in 4.3 (legacy) and 3.3
 (Newton) minutes, its face 0.91 / 1.59 and 1.76 / 3.20 m out.)
