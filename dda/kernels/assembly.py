@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["matrix_data", "upper_data", "rhs_data", "dense_system", "add_pair_vectors"]
+__all__ = ["matrix_data", "upper_data", "rhs_data", "add_pair_vectors"]
 
 
 @njit(cache=True)
@@ -199,19 +199,3 @@ def add_pair_vectors(out, bj, bk, pair_f):
         for i in range(6):
             out[bk[c], i] += pair_f[c, 6 + i]
     return out
-
-
-@njit(cache=True)
-def dense_system(n, block_base, block_step, block_k, block_f, free_blocks, pair_base,
-                 pair_step, side_row, side_block, pair_f, d_known, rows, terms, weights):
-    """The dense n x n matrix (:func:`matrix_data`, ``row_step = n``) and the right-hand
-    side (:func:`rhs_data` on the free blocks' forces) of a small system in one call."""
-    data = matrix_data(n * n, n, block_base, block_step, block_k, free_blocks, pair_base,
-                       pair_step, rows, terms, weights)
-    rhs = np.empty(n)
-    for s in range(free_blocks.shape[0]):
-        for i in range(6):
-            rhs[6 * s + i] = block_f[free_blocks[s], i]
-    return data.reshape(n, n), rhs_data(rhs, side_row, side_block, pair_f, d_known, rows,
-                                        terms, weights)
-

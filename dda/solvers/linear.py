@@ -13,13 +13,7 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from dda.kernels.assembly import (
-    add_pair_vectors,
-    dense_system,
-    matrix_data,
-    rhs_data,
-    upper_data,
-)
+from dda.kernels.assembly import add_pair_vectors, matrix_data, rhs_data, upper_data
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.profiling import count_solve, section
 from dda.solvers.sparse_factor import (
@@ -141,8 +135,9 @@ class SystemPattern:
 
         The structure depends on the coupled block pairs alone: with a ``cache`` (a
         :class:`dda.solvers.sparse_factor.FactorSet`) the last one is kept for the next
-        step whose contacts couple the same blocks (the same arrays, so the sparse solver
-        sees the same pattern at once)."""
+        steps whose contacts couple a subset of its block pairs, within
+        ``STRUCTURE_SLACK`` (the same arrays, so the sparse solver sees the same pattern at
+        once and keeps its analysis)."""
         keys = bc * nf + br
         if cache is None:
             ub, inverse = np.unique(keys, return_inverse=True)
@@ -209,23 +204,6 @@ class SystemPattern:
             return sp.csc_matrix((data, self.indices, self.indptr), shape=(n, n))
         return sp.csc_matrix((data[self._take], self._kept_indices, self._kept_indptr),
                              shape=(self.unknowns, self.unknowns))
-
-    def dense_system(self, block_k, block_f, pair_k, pair_f, d_known):
-        """``(matrix, right-hand side)`` of a dense system with the contacts' stiffness as a
-        :class:`dda.kernels.PairStiffness`, in one compiled call (the values of
-        :meth:`matrix` and :meth:`rhs`); None where that does not apply (a sparse system,
-        rigid blocks, or stiffness given as an array)."""
-        if self.n > DENSE_LIMIT or self.keep is not None or not isinstance(pair_k,
-                                                                           PairStiffness):
-            return None
-        f64 = np.float64
-        return dense_system(self.n, self.block_base, self.block_step,
-                            np.ascontiguousarray(block_k, dtype=f64),
-                            np.ascontiguousarray(block_f, dtype=f64), self.free_blocks,
-                            self.pair_base, self.pair_step, self.side_row, self.side_block,
-                            np.ascontiguousarray(pair_f, dtype=f64),
-                            np.ascontiguousarray(d_known, dtype=f64), pair_k.rows,
-                            pair_k.terms, pair_k.weights)
 
     def upper_matrix(self, block_k, pair_k) -> UpperTriangle | None:
         """The matrix of the unknowns as its upper triangle in CSR (what PARDISO reads for a
@@ -391,16 +369,12 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         d = d_known.copy()
         if pattern.unknowns == 0:
             return d
-        system = pattern.dense_system(block_k, block_f, pair_k, pair_f, d_known)
-        if system is not None:
-            k, rhs = system
-        else:
-            k = None
-            if factor is not None and factor.reads_upper:
-                k = pattern.upper_matrix(block_k, pair_k)
-            if k is None:
-                k = pattern.matrix(block_k, pair_k)
-            rhs = pattern.reduce(pattern.rhs(block_f, pair_k, pair_f, d_known))
+        k = None
+        if factor is not None and factor.reads_upper:
+            k = pattern.upper_matrix(block_k, pair_k)
+        if k is None:
+            k = pattern.matrix(block_k, pair_k)
+        rhs = pattern.reduce(pattern.rhs(block_f, pair_k, pair_f, d_known))
     with section("solve"):
         count_solve()
         sol = _solve(k, rhs, factor, near)
