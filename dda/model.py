@@ -14,6 +14,7 @@ import numpy as np
 
 from dda import geometry
 from dda.contact.contacts import ContactSet, pair_key
+from dda.contact.dashpot import damping_ratio
 from dda.contact.detection import Memo, VertexTopology
 from dda.contact.friction import FrictionLaw
 from dda.scene import Scene
@@ -34,6 +35,8 @@ class JointTable:
     law : (n_joints,) row of each joint's friction law in ``laws``
     laws : the distinct friction laws
     history_fields : every law's history fields and their initial values
+    damping_ratio : (n_joints,) zeta of each joint's impact dashpot
+        (:mod:`dda.contact.dashpot`), or None when no joint has one
     """
 
     default: int
@@ -44,6 +47,7 @@ class JointTable:
     law: np.ndarray
     laws: tuple[FrictionLaw, ...]
     history_fields: dict
+    damping_ratio: np.ndarray | None = None  # None also in checkpoints of earlier versions
 
     @classmethod
     def from_scene(cls, scene: Scene, n_blocks: int) -> JointTable:
@@ -68,12 +72,13 @@ class JointTable:
         fields = {}
         for law in laws:
             fields.update(law.history_fields())
+        zeta = np.array([damping_ratio(j.restitution) for j in joints], dtype=float)
         # "auto" penalties are NaN until the simulation chooses them (:meth:`with_penalties`)
         return cls(default, keys[order], ids[order],
                    np.array([_penalty(j.normal_penalty) for j in joints], dtype=float),
                    np.array([_penalty(j.shear_penalty) for j in joints], dtype=float),
                    np.array([law_of[id(j.friction)] for j in joints], dtype=np.int64),
-                   tuple(laws), fields)
+                   tuple(laws), fields, zeta if np.any(zeta > 0.0) else None)
 
     @property
     def auto(self) -> bool:

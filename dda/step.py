@@ -24,6 +24,7 @@ import numpy as np
 
 from dda import geometry
 from dda.contact.contacts import OPEN, ContactSet, carry_over
+from dda.contact.dashpot import contact_mass, dashpot_stiffness
 from dda.contact.detection import (
     CandidateContacts,
     bounding_boxes,
@@ -165,7 +166,7 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     d0 = search_distance(model, state, dt, carry, ints.centroid, d_known[~model.free, :2],
                          search_hint)
     found = _detect(model, state, d0, settings.penetration_tolerance)
-    element = _element(model, state, found, ints.centroid)
+    element = _element(model, state, found, ints, dt if carry else 0.0)
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
                           d_known=d_known, element=element,
                           max_open_close=settings.max_open_close, rigid=model.rigid,
@@ -256,9 +257,10 @@ def _pairs(model, x, margin) -> np.ndarray:
     return pairs[model.free[pairs[:, 0]] | model.free[pairs[:, 1]]]
 
 
-def _element(model, state, found: _Detected, centroid) -> ContactElement:
-    """The contact element of the detected contacts, each with its joint's penalties and law
-    (new and open contacts get their law's initial history)."""
+def _element(model, state, found: _Detected, ints, dt: float) -> ContactElement:
+    """The contact element of the detected contacts, each with its joint's penalties, impact
+    dashpot and law (new and open contacts get their law's initial history). ``dt`` 0: a
+    static step, which takes no dashpot."""
     contacts = found.contacts
     joint = model.joint_index(contacts.bj, contacts.bk)
     if model.joints.default < 0 and np.any(joint < 0):
@@ -273,9 +275,24 @@ def _element(model, state, found: _Detected, centroid) -> ContactElement:
     else:
         laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
     laws.initial_history(contacts.history, found.fresh)
-    return ContactElement(contacts, state.x, centroid, model.topo.nxt, model.topo.prv,
-                          model.joints.normal_penalty[joint],
-                          model.joints.shear_penalty[joint], laws, found.geometry)
+    pn = model.joints.normal_penalty[joint]
+    element = ContactElement(contacts, state.x, ints.centroid, model.topo.nxt, model.topo.prv,
+                             pn, model.joints.shear_penalty[joint], laws, found.geometry)
+    zeta = model.joints.damping_ratio
+    if zeta is not None and dt > 0.0 and len(contacts):
+        element.dashpot = dashpot_stiffness(zeta[joint], pn, _contact_mass(
+            model, ints, contacts, element.geometry), dt)
+    return element
+
+
+def _contact_mass(model, ints, contacts, geom) -> np.ndarray:
+    """(m,) the mass each contact's impact dashpot sees (:func:`dda.contact.dashpot.
+    contact_mass`), from the blocks at the step's start."""
+    mass = np.where(model.free, model.density * ints.area, np.inf)
+    inertia = np.where(model.free, model.density * (ints.sxx + ints.syy), np.inf)
+    bj, bk = contacts.bj, contacts.bk
+    return contact_mass(geom.p1, geom.normal, ints.centroid[bj], ints.centroid[bk], mass[bj],
+                        mass[bk], inertia[bj], inertia[bk])
 
 
 def _check_moves(model, move, d0, max_ratio):

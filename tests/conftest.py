@@ -39,11 +39,12 @@ def incline_scene(phi, slope_deg=30.0, penalty=1e9, gravity=9.81, rigid=False):
     return scene, top, t
 
 
-def wedge_scene(penalty=1e7, law=None):
+def wedge_scene(penalty=1e7, law=None, restitution=1.0):
     """A block sliding on a free 30 degree wedge that rests on a fixed floor.
 
     The block's contacts lie on the wedge's moving edge, so g_n and g_s are nonlinear in the
     unknowns (the geometric terms of the tangent matter); a soft penalty makes them large.
+    ``restitution``: the joints' impact dashpot (1: none).
     """
     rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
     scene = dda.Scene(gravity=9.81)
@@ -58,9 +59,11 @@ def wedge_scene(penalty=1e7, law=None):
     p0, a = 1.0 * t, 0.3
     top = scene.add_block([p0, p0 + a * t, p0 + a * t + a * n, p0 + a * n], rock, name="top")
     scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
-                                  friction=law if law is not None else CoulombSingle(phi=20)))
+                                  friction=law if law is not None else CoulombSingle(phi=20),
+                                  restitution=restitution))
     scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=penalty,
-                                  friction=CoulombSingle(phi=45)), between=(floor, wedge))
+                                  friction=CoulombSingle(phi=45), restitution=restitution),
+                    between=(floor, wedge))
     return scene, wedge, top
 
 

@@ -35,6 +35,7 @@ between = ["base", "top"]
 normal_penalty = 2e9
 shear_penalty = 2e9
 friction = { law = "transition", phi_static = 35.0, phi_dynamic = 25.0 }
+restitution = 0.2
 
 [[blocks]]
 name = "base"
@@ -93,6 +94,7 @@ def test_a_full_scene_builds_what_the_api_would(tmp_path):
     assert scene._blocks[0].fixed
     pair = scene.joint_for(0, 1)
     assert isinstance(pair.friction, StaticDynamicTransition) and pair.normal_penalty == 2e9
+    assert pair.restitution == 0.2 and scene.joint_for(1, 2).restitution == 1.0
     assert scene.joint_for(1, 2).friction.phi == 30.0
     assert isinstance(loaded.solver, LegacyPullBack)
     assert loaded.settings == {"dt": 1e-3, "max_open_close": 20}
@@ -357,3 +359,9 @@ def test_table_errors_name_the_line_and_the_key(tmp_path, change, line, key, wor
     shown = text.splitlines()[number - 1]
     last = key.split(".")[-1].split("[")[0]
     assert last in shown, (msg, shown)
+
+
+def test_a_restitution_outside_0_to_1_names_its_line(tmp_path):
+    text = FULL.replace("restitution = 0.2", "restitution = 1.5")
+    with pytest.raises(SceneFileError, match=r"joints\.pair\[0\].*restitution must be between"):
+        load_scene(write(tmp_path, text))

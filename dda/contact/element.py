@@ -196,10 +196,15 @@ class ContactElement:
     laws : LawGroups
     geometry : ContactGeometry, optional
         The contacts' geometry at ``x`` when it is at hand (computed otherwise).
+    dashpot : (m,) array, optional
+        Each contact's impact dashpot as a stiffness on the step's change of its normal gap,
+        ``c / dt`` (:mod:`dda.contact.dashpot`); None: no dashpot.
     """
 
     def __init__(self, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
-                 shear_penalty, laws: LawGroups, geometry: ContactGeometry | None = None):
+                 shear_penalty, laws: LawGroups, geometry: ContactGeometry | None = None,
+                 dashpot: np.ndarray | None = None):
+        self.dashpot = dashpot
         if len(contacts) == 0:  # a step without contacts does no contact work
             self._build_empty(contacts, normal_penalty, shear_penalty, laws)
             return
@@ -272,6 +277,39 @@ class ContactElement:
             return None
         return laws
 
+    @cached_property
+    def dashpot_reference(self) -> np.ndarray:
+        """(m,) the gap an impact dashpot's rate is measured from: the gap at the step's
+        start, or 0 for a contact that starts the step open (a dashpot acts on the
+        penetration only, never across a gap): ``t_d = (c / dt)(g_n - min(g_n0, 0))``."""
+        return np.minimum(self.gap0, 0.0)
+
+    @cached_property
+    def release(self) -> np.ndarray:
+        """(m,) the gap below which each contact is closed: 0 without an impact dashpot
+        (:mod:`dda.contact.dashpot`); with one, the gap at which the spring's and the
+        dashpot's forces cancel, ``p_n g + (c / dt)(g - g_ref) = 0`` (:attr:`dashpot_reference`),
+        at or below 0. A contact that opens lets go as its force reaches zero, without the
+        pull of a dashpot that resists its opening, and the normal force is continuous."""
+        if self.dashpot is None:
+            return np.zeros(len(self))
+        return self.dashpot * self.dashpot_reference / (self.normal_penalty + self.dashpot)
+
+    @cached_property
+    def judge_stiffness(self) -> np.ndarray:
+        """(m,) the normal force's stiffness on the gap measured from :attr:`release`:
+        ``p_n``, or ``p_n + c / dt`` with an impact dashpot, whose normal force (the spring's
+        and the dashpot's) is ``(p_n + c / dt)(g_n - release)``."""
+        if self.dashpot is None:
+            return self.normal_penalty
+        return self.normal_penalty + self.dashpot
+
+    def judged_gap(self, gap: np.ndarray) -> np.ndarray:
+        """The gaps OPEN-CLOSE judges a contact by: ``gap`` less :attr:`release` (``gap``
+        itself without a dashpot), so that the contact is closed where it is negative and
+        :attr:`judge_stiffness` times it is the normal force the friction law sees."""
+        return gap if self.dashpot is None else gap - self.release
+
     def legacy_trial(self, history, delta_g_s, t_n, state):
         """Legacy DDA's end of a step: sticking contacts keep their spring (no yield check:
         the pull-back of the next step cuts any excess), sliding ones are returned to the
@@ -305,10 +343,11 @@ class ContactElement:
     def legacy_contributions(self, state, t_stick, t_s_slip):
         """Stiffness and force of original DDA's springs (METHOD.md section 4, legacy terms).
 
-        Closed contacts: normal spring ``p_n E^T E`` with force ``-p_n g_n0 E^T``; stick:
-        shear spring ``p_s I^T I`` with force ``-t_stick I^T`` (``t_stick``: the spring's
-        force at the step's start, :meth:`stick` with no increment); slip: the friction force
-        ``-t_s I^T`` as a load.
+        Closed contacts: normal spring ``p_n E^T E`` with force ``-p_n g_n0 E^T`` (and the
+        impact dashpot's ``(c / dt) E^T E``, :meth:`with_dashpot`); stick: shear spring
+        ``p_s I^T I`` with force ``-t_stick I^T`` (``t_stick``: the spring's force at the
+        step's start, :meth:`stick` with no increment); slip: the friction force ``-t_s I^T``
+        as a load.
 
         Returns
         -------
@@ -324,7 +363,19 @@ class ContactElement:
             np.asarray(state, dtype=np.int8), *(np.ascontiguousarray(a, dtype=f64) for a in (
                 self.gap0, self.normal_penalty, self.shear_penalty, t_stick, t_s_slip,
                 self.e_row, self.i_row)))
+        self.with_dashpot(weights, f, state)
         return PairStiffness.checked_by_caller(self._spring_rows, SPRING_TERMS, weights), f
+
+    def with_dashpot(self, weights: np.ndarray, force: np.ndarray, state: np.ndarray):
+        """Legacy DDA's spring weights ``(k_n, k_s)`` and forces with each closed contact's
+        impact dashpot (:mod:`dda.contact.dashpot`), in place: ``c / dt`` added to ``k_n``
+        and ``-(c / dt)(g_n0 - g_ref) E^T`` to the force, the dashpot's
+        ``(c / dt)(g_n0 + E d - g_ref)`` on the linearized gap (``g_ref``:
+        :attr:`dashpot_reference`; the force term only on a contact that starts open)."""
+        if self.dashpot is not None:
+            cd = np.where(state != OPEN, self.dashpot, 0.0)
+            weights[:, 0] += cd
+            force -= (cd * (self.gap0 - self.dashpot_reference))[:, None] * self.e_row
 
     @cached_property
     def _spring_rows(self) -> np.ndarray:
@@ -344,6 +395,13 @@ class ContactElement:
             K = p_n E^T E + t_n (Delta delta g_n) + I^T (k_ss I + k_sn E) + t_s (Delta delta g_s)
 
         k_sn couples the normal and the shear gap on a slipping contact (unsymmetric K).
+        With an impact dashpot (:mod:`dda.contact.dashpot`) ``t_n`` (in ``r``, in the
+        geometric term and for the law) is the spring's and the dashpot's,
+        ``p_n g_n + (c / dt)(g_n - g_ref)`` (:attr:`dashpot_reference`), ``p_n`` in the first
+        term and in the law's tangent is ``p_n + c / dt``, and a contact is closed while that
+        force is compressive (``g_n`` below :attr:`release`); the returned ``t_n`` is the
+        spring's alone (what the next step starts from, the guard measures depth by and the
+        energy counts).
         Every trial starts from the committed history, so nothing here needs undoing.
         """
         with section("contact_element"):
@@ -357,23 +415,31 @@ class ContactElement:
         p2 = g.p2 + np.einsum("mij,mj->mi", a2, dd)
         p3 = g.p3 + np.einsum("mij,mj->mi", a3, dd)
         kin = trial_kinematics(p1, p2, p3, self.contacts.xi0, self.maps, second=False)
-        closed = kin.gap < 0.0
         pn, ps = self.normal_penalty, self.shear_penalty
-        t_n = np.where(closed, pn * kin.gap, 0.0)
+        if self.dashpot is None:
+            closed = kin.gap < 0.0
+            kn = pn
+            t_n = t_spring = np.where(closed, pn * kin.gap, 0.0)
+        else:  # the spring's and the dashpot's force on the exact gap
+            judged = self.judged_gap(kin.gap)
+            closed = judged < 0.0
+            kn = self.judge_stiffness
+            t_n = np.where(closed, kn * judged, 0.0)
+            t_spring = np.where(closed, pn * kin.gap, 0.0)
         dgs = kin.shear - self.shear0
         if self.kernel_laws is not None:
             with section("return_map"):
                 t_s, slipping, g_se, slip, sliding, kss, ksn = law_response(
                     *self.kernel_laws, *kernel_history(self.contacts.history, len(self)),
-                    as_float64(dgs), as_float64(t_n), as_float64(ps), as_float64(pn),
+                    as_float64(dgs), as_float64(t_n), as_float64(ps), as_float64(kn),
                     as_float64(self.length), closed)
             history = kernel_history_dict(self.contacts.history, g_se, slip, sliding)
         else:
             t_s, slipping, history, (kss, ksn) = self.laws.return_map(  # with the tangent
                 self.contacts.history, dgs, t_n, ps, self.length, where=closed,
-                normal_penalty=pn)
+                normal_penalty=kn)
         residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
         stiffness = consistent_tangent(kin, self.maps, self.contacts.xi0,
-                                       np.where(closed, pn, 0.0), kss, ksn, t_n, t_s, closed)
-        return ContactResponse(closed, slipping & closed, t_n, t_s, history, residual,
+                                       np.where(closed, kn, 0.0), kss, ksn, t_n, t_s, closed)
+        return ContactResponse(closed, slipping & closed, t_spring, t_s, history, residual,
                                stiffness)

@@ -46,10 +46,20 @@ class LegacyPullBack(NonlinearSolver):
         if el.kernel_laws is not None:
             return StepSolution(d, _compiled_trial(el, state, gap, dgs, history), True,
                                 oc.passes, oc.passes)
-        t_n = np.where(state != OPEN, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
+        # the friction sees the spring's and an impact dashpot's normal force; the contacts
+        # keep the spring's
+        t_n = np.where(state != OPEN, np.minimum(el.judge_stiffness * el.judged_gap(gap),
+                                                 0.0), 0.0)
         t_s, new_history = el.legacy_trial(history, dgs, t_n, state)
-        trial = el.trial_contacts(state, t_n, t_s, new_history)
+        trial = el.trial_contacts(state, _spring_force(el, state, gap, t_n), t_s, new_history)
         return StepSolution(d, trial, True, oc.passes, oc.passes)
+
+
+def _spring_force(el, state, gap, t_n):
+    """The normal force the contacts keep: the spring's (``t_n`` itself without a dashpot)."""
+    if el.dashpot is None:
+        return t_n
+    return np.where(state != OPEN, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
 
 
 def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
@@ -58,9 +68,10 @@ def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
     ``trial_contacts``)."""
     with section("return_map"):
         t_n, t_s, g_se, slip, sliding = legacy_end(
-            state, as_float64(gap), as_float64(dgs), *el.kernel_laws,
-            *kernel_history(history, len(el)), as_float64(el.normal_penalty),
+            state, as_float64(el.judged_gap(gap)), as_float64(dgs), *el.kernel_laws,
+            *kernel_history(history, len(el)), as_float64(el.judge_stiffness),
             as_float64(el.shear_penalty), as_float64(el.length))
     c = el.contacts
-    return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s,
+    return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(),
+                      _spring_force(el, state, gap, t_n), t_s,
                       kernel_history_dict(history, g_se, slip, sliding))

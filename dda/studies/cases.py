@@ -10,7 +10,8 @@ from dda.materials import LinearElastic
 
 __all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip",
            "stepped_table", "rock_slope", "slide_down_dip", "SLOPE_DIP", "SLOPE_STOP",
-           "ramped_sine", "stacked_cubes", "CUBE", "shaken_incline", "gap_until_stopper"]
+           "ramped_sine", "stacked_cubes", "CUBE", "shaken_incline", "gap_until_stopper",
+           "rocking_block", "rocking_amplitudes"]
 
 G = 9.81
 
@@ -274,3 +275,42 @@ def shaken_incline(friction, table, dip: float = 20.0, penalty: float = 1e9,
                                   friction=friction))
     scene.shake(lower, acceleration=table)
     return scene, lower, block, (float(along[0]), float(along[1]))
+
+
+def rocking_block(tilt: float, penalty: float = 2e8, restitution: float = 1.0,
+                  width: float = 0.15, height: float = 0.45, phi: float = 36.4):
+    """A ``width`` x ``height`` block of the stacked cubes' concrete (:func:`stacked_cubes`)
+    released from rest on its right corner at ``tilt`` radians on a fixed base: Housner's
+    rocking block (:func:`dda.studies.references.housner_rocking`). The joint has ``penalty``
+    N/m normal and shear, friction ``phi`` degrees and the impact dashpot of ``restitution``
+    (:class:`dda.contact.JointMaterial`). ``result.rotation`` of the block is then
+    ``tilt`` when it stands upright.
+
+    Returns
+    -------
+    scene, block
+    """
+    rock = LinearElastic(young=14.9e9, poisson=0.2, density=21.56e3 / G)
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-0.6, -0.1), (0.6, -0.1), (0.6, 0.0), (-0.6, 0.0)], rock, fixed=True,
+                    name="base")
+    c, s = np.cos(tilt), np.sin(tilt)
+    corners = np.array([(-width, 0.0), (0.0, 0.0), (0.0, height), (-width, height)])
+    corners = corners @ np.array([[c, -s], [s, c]]) + [0.5 * width, 1e-7]
+    block = scene.add_block([tuple(map(float, p)) for p in corners], rock, name="block")
+    scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(phi=phi),
+                                  restitution=restitution))
+    return scene, block
+
+
+def rocking_amplitudes(time, rotation, tilt: float, after: float = 0.02) -> np.ndarray:
+    """The rocking amplitudes of a :func:`rocking_block` run released at ``tilt``: the
+    largest tilt from upright (``rotation - tilt``) of each swing after the first (a swing
+    ends where the tilt changes sign: an impact) that starts after ``after`` seconds."""
+    theta = np.asarray(rotation) - tilt
+    time = np.asarray(time)
+    side = np.sign(theta)
+    starts = np.flatnonzero(side[1:] != side[:-1]) + 1
+    swings = np.split(np.arange(len(theta)), starts)
+    return np.array([float(np.max(np.abs(theta[s]))) for s in swings[1:]
+                     if len(s) and time[s[0]] > after and side[s[0]] != 0])
