@@ -218,12 +218,14 @@ def ramped_sine(freq: float, amplitude_gal: float, ramp: float = 0.5,
     return accel
 
 
-def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: float = 36.4):
+def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: float = 36.4,
+                  restitution: float = 1.0):
     """Three 15 cm concrete cubes (7.4 kg each) stacked on a shaking table: A 3 and A 4(2).
 
     Unit weight 21.56 kN/m^3 (7.4 kg / 0.15^3 m^3), E 14.9 GPa, nu 0.2, joint friction
     ``phi`` degrees (A's single-block value), normal penalty ``penalty`` (A: 2e4 kN/m) and
-    shear penalty ``shear_ratio`` times it. The table is a fixed 1.2 m x 0.1 m block following
+    shear penalty ``shear_ratio`` times it, the impact dashpot of ``restitution``
+    (:class:`dda.contact.JointMaterial`). The table is a fixed 1.2 m x 0.1 m block following
     ``table`` (an acceleration history, see :func:`ramped_sine`).
 
     Returns
@@ -239,7 +241,7 @@ def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: fl
                               (-h, (k + 1) * CUBE)], rock, name=f"cube{k + 1}")
              for k in range(3)]
     scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=shear_ratio * penalty,
-                                  friction=CoulombSingle(phi=phi)))
+                                  friction=CoulombSingle(phi=phi), restitution=restitution))
     scene.shake(base, acceleration=table)
     return scene, base, cubes
 
