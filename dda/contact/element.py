@@ -304,6 +304,13 @@ class ContactElement:
             return self.normal_penalty
         return self.normal_penalty + self.dashpot
 
+    def spring_force(self, closed: np.ndarray, gap: np.ndarray, t_n: np.ndarray) -> np.ndarray:
+        """The normal force a contact keeps at the step's end: its spring's ``p_n g_n`` where
+        ``closed`` (``t_n``, the normal force with ``gap``, itself without a dashpot)."""
+        if self.dashpot is None:
+            return t_n
+        return np.where(closed, np.minimum(self.normal_penalty * gap, 0.0), 0.0)
+
     def judged_gap(self, gap: np.ndarray) -> np.ndarray:
         """The gaps OPEN-CLOSE judges a contact by: ``gap`` less :attr:`release` (``gap``
         itself without a dashpot), so that the contact is closed where it is negative and
@@ -415,17 +422,12 @@ class ContactElement:
         p2 = g.p2 + np.einsum("mij,mj->mi", a2, dd)
         p3 = g.p3 + np.einsum("mij,mj->mi", a3, dd)
         kin = trial_kinematics(p1, p2, p3, self.contacts.xi0, self.maps, second=False)
-        pn, ps = self.normal_penalty, self.shear_penalty
-        if self.dashpot is None:
-            closed = kin.gap < 0.0
-            kn = pn
-            t_n = t_spring = np.where(closed, pn * kin.gap, 0.0)
-        else:  # the spring's and the dashpot's force on the exact gap
-            judged = self.judged_gap(kin.gap)
-            closed = judged < 0.0
-            kn = self.judge_stiffness
-            t_n = np.where(closed, kn * judged, 0.0)
-            t_spring = np.where(closed, pn * kin.gap, 0.0)
+        ps, kn = self.shear_penalty, self.judge_stiffness
+        # the normal force (with an impact dashpot, the spring's and the dashpot's) on the
+        # exact gap
+        judged = self.judged_gap(kin.gap)
+        closed = judged < 0.0
+        t_n = np.where(closed, kn * judged, 0.0)
         dgs = kin.shear - self.shear0
         if self.kernel_laws is not None:
             with section("return_map"):
@@ -441,5 +443,6 @@ class ContactElement:
         residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
         stiffness = consistent_tangent(kin, self.maps, self.contacts.xi0,
                                        np.where(closed, kn, 0.0), kss, ksn, t_n, t_s, closed)
-        return ContactResponse(closed, slipping & closed, t_spring, t_s, history, residual,
-                               stiffness)
+        return ContactResponse(closed, slipping & closed,
+                               self.spring_force(closed, kin.gap, t_n), t_s, history,
+                               residual, stiffness)

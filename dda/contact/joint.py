@@ -67,4 +67,3 @@ class JointMaterial:
     def auto(self) -> bool:
         """Whether either penalty is left to the simulation ("auto")."""
         return "auto" in (self.normal_penalty, self.shear_penalty)
-

@@ -51,15 +51,10 @@ class LegacyPullBack(NonlinearSolver):
         t_n = np.where(state != OPEN, np.minimum(el.judge_stiffness * el.judged_gap(gap),
                                                  0.0), 0.0)
         t_s, new_history = el.legacy_trial(history, dgs, t_n, state)
-        trial = el.trial_contacts(state, _spring_force(el, state, gap, t_n), t_s, new_history)
+        trial = el.trial_contacts(state, el.spring_force(state != OPEN, gap, t_n), t_s,
+                                 new_history)
         return StepSolution(d, trial, True, oc.passes, oc.passes)
 
-
-def _spring_force(el, state, gap, t_n):
-    """The normal force the contacts keep: the spring's (``t_n`` itself without a dashpot)."""
-    if el.dashpot is None:
-        return t_n
-    return np.where(state != OPEN, np.minimum(el.normal_penalty * gap, 0.0), 0.0)
 
 
 def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
@@ -73,5 +68,5 @@ def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
             as_float64(el.shear_penalty), as_float64(el.length))
     c = el.contacts
     return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(),
-                      _spring_force(el, state, gap, t_n), t_s,
+                      el.spring_force(state != OPEN, gap, t_n), t_s,
                       kernel_history_dict(history, g_se, slip, sliding))
