@@ -14,18 +14,22 @@ inside (:func:`edge_penetrations`). A vertex inside another block is *tracked* w
 of that vertex (or, for a vertex-vertex contact, of the vertex at the end of the contacted
 edge) against that block carries a spring penetration ``-t_n / p_n`` at least as deep, give or
 take the tolerance; anything else is an untracked penetration, which the simulation refuses.
+An open contact that an impact dashpot let go while its vertex was still inside (the spring's
+and the dashpot's force summed to zero, :attr:`dda.contact.element.ContactElement.release`)
+holds its vertex at its own gap (:func:`released_depth`): the vertex is on its way out, and
+the contact closes again if it turns back.
 
 Every operation is on arrays over (vertex, block) pairs from the broad phase.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit
 
-from dda.contact.contacts import OPEN
+from dda.contact.contacts import OPEN, STICK
 from dda.contact.detection import (
     VertexTopology,
     _corners_inside_kernel,
@@ -35,7 +39,7 @@ from dda.contact.detection import (
 
 __all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
            "edge_penetrations", "untracked_depth", "untracked_edge_depth",
-           "untracked_penetrations"]
+           "untracked_penetrations", "released_depth"]
 
 
 @dataclass
@@ -135,18 +139,49 @@ def edge_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 0.
     return _inside(x, topo, min_depth, pairs, boxes, midpoints=True)
 
 
+def released_depth(x: np.ndarray, contacts, topo: VertexTopology,
+                   dashpot: np.ndarray) -> np.ndarray:
+    """(m,) how deep inside the other block each open contact with an impact dashpot leaves
+    its vertex: ``max(-g_n, 0)`` with ``g_n`` the vertex's gap to its edge's line at ``x``;
+    0 for closed contacts and for those without a dashpot (``dashpot`` False).
+
+    Such a contact was let go where the spring's and the dashpot's force summed to zero,
+    before the vertex was out; it holds the vertex at that depth until it is (the guard
+    counts it as a closed spring ``-t_n / p_n`` of that depth).
+    """
+    from dda.contact.kinematics import contact_geometry  # kinematics imports the kernels
+
+    out = np.zeros(len(contacts))
+    sel = np.flatnonzero((contacts.state == OPEN) & np.asarray(dashpot, dtype=bool))
+    if len(sel):
+        gap = contact_geometry(x, contacts.vertex[sel], contacts.edge[sel], topo.nxt).gap
+        out[sel] = np.maximum(-gap, 0.0)
+    return out
+
+
+def _holding(contacts, normal_penalty, released):
+    """``contacts`` with each contact of ``released`` depth > 0 (:func:`released_depth`)
+    shown as a closed spring of that depth, for the guard's accounting only."""
+    if released is None or not np.any(released > 0.0):
+        return contacts
+    hold = released > 0.0
+    return replace(contacts, state=np.where(hold, np.int8(STICK), contacts.state),
+                   t_n=np.where(hold, -normal_penalty * released, contacts.t_n))
+
+
 def untracked_edge_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
-                         topo: VertexTopology) -> np.ndarray:
+                         topo: VertexTopology, released=None) -> np.ndarray:
     """(len(pen),) how much deeper each edge midpoint of :func:`edge_penetrations` is inside
     its block k than the springs that hold the edge there.
 
     A straight edge is held by its two end vertices' springs against k
     (:func:`untracked_depth`) and by the springs of k's vertices on the edge; between them
     it is no deeper than the deepest of those, so the midpoint's depth less that deepest
-    spring is what no contact accounts for.
+    spring is what no contact accounts for. ``released``: as in :func:`untracked_depth`.
     """
     if len(pen) == 0:
         return np.zeros(0)
+    contacts = _holding(contacts, normal_penalty, released)
     zero = np.zeros(len(pen))
     ends = [Penetrations(v, pen.block, zero, pen.edge) for v in (pen.vertex,
                                                                   topo.nxt[pen.vertex])]
@@ -164,7 +199,7 @@ def untracked_edge_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray
 
 
 def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
-                    topo: VertexTopology) -> np.ndarray:
+                    topo: VertexTopology, released=None) -> np.ndarray:
     """(len(pen),) how much deeper each penetration is than the closed spring that holds it.
 
     A penetration of vertex P into block k at depth delta is held by a closed contact of P
@@ -180,10 +215,12 @@ def untracked_depth(pen: Penetrations, contacts, normal_penalty: np.ndarray,
     contacts : the step's trial :class:`dda.contact.ContactSet`
     normal_penalty : (m,) normal penalty of each contact
     topo : the blocks' vertex topology
+    released : (m,) optional, the depth at which open contacts an impact dashpot let go
+        hold their vertices (:func:`released_depth`)
     """
     if len(pen) == 0:
         return np.zeros(0)
-    c = contacts
+    c = _holding(contacts, normal_penalty, released)
     if not np.any(c.state != OPEN):
         return pen.depth.copy()
     ints = [np.asarray(a, dtype=np.int64) for a in (pen.vertex, pen.block, c.vertex, c.edge,
@@ -295,10 +332,11 @@ def _pairwise_sum(values, order, start, n):
 
 
 def untracked_penetrations(pen: Penetrations, contacts, normal_penalty: np.ndarray,
-                           tolerance: np.ndarray, topo: VertexTopology) -> np.ndarray:
+                           tolerance: np.ndarray, topo: VertexTopology,
+                           released=None) -> np.ndarray:
     """Which of ``pen`` no closed contact accounts for (boolean mask over ``pen``): those
     deeper than their spring (:func:`untracked_depth`) by more than ``tolerance``."""
-    return untracked_depth(pen, contacts, normal_penalty, topo) > tolerance
+    return untracked_depth(pen, contacts, normal_penalty, topo, released) > tolerance
 
 
 @dataclass(frozen=True)
@@ -318,15 +356,17 @@ class GuardReport:
 
 
 def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
-                      tolerance: float) -> GuardReport:
+                      tolerance: float, released=None) -> GuardReport:
     """The penetration guard on a trial configuration ``x_new`` of ``model``'s blocks.
 
     ``contacts`` are the trial's contacts, ``normal_penalty`` their p_n, ``pairs`` the block
     pairs whose boxes may overlap; ``tolerance`` is a fraction of the thinner block's
-    half-width (:attr:`dda.model.Model.thickness`).
+    half-width (:attr:`dda.model.Model.thickness`); ``released`` the depths at which open
+    contacts an impact dashpot let go hold their vertices (:func:`released_depth`).
     """
     if model.n_blocks < 2:
         return GuardReport()
+    contacts = _holding(contacts, normal_penalty, released)
     topo = model.topo
     boxes = bounding_boxes(x_new, topo.offsets)
     pen = vertex_penetrations(x_new, topo, pairs=pairs, boxes=boxes)

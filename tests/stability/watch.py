@@ -8,7 +8,7 @@ import numpy as np
 
 from dda import geometry
 from dda.contact.detection import bounding_boxes, broad_phase
-from dda.contact.penetration import untracked_depth, vertex_penetrations
+from dda.contact.penetration import released_depth, untracked_depth, vertex_penetrations
 from dda.recorder import pair_forces
 from dda.step import deepest_spring
 
@@ -59,8 +59,14 @@ def untracked(sim) -> float:
     pen = vertex_penetrations(x, sim.model.topo, pairs=pairs)
     c = sim.state.contacts
     model = sim.model
-    pn = model.joints.normal_penalty[model.joint_index(c.bj, c.bk)] if len(c) else np.zeros(0)
-    return float(np.max(untracked_depth(pen, c, pn, sim.model.topo), initial=0.0))
+    joint = model.joint_index(c.bj, c.bk)
+    pn = model.joints.normal_penalty[joint] if len(c) else np.zeros(0)
+    # an open contact that its impact dashpot let go with the vertex still inside holds it
+    # at its gap until the vertex is out
+    zeta = model.joints.damping_ratio
+    released = (None if zeta is None or not len(c) else
+                released_depth(x, c, model.topo, zeta[joint] > 0.0))
+    return float(np.max(untracked_depth(pen, c, pn, sim.model.topo, released), initial=0.0))
 
 
 def guard_tolerance(sim) -> float:
