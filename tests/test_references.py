@@ -98,3 +98,74 @@ def test_bad_arguments_are_named(kwargs, message):
 def test_lift_off_is_refused():
     with pytest.raises(ValueError, match="lifts off"):
         sliding_block(lambda t: (0.0, -2 * G), np.linspace(0, 1, 3), 0.4)
+
+
+# --- a rigid block rocking on a shaken base (housner_shaken) ----------------------------
+
+def _pulse(peak, length=0.2):
+    """A half-sine pulse of the base, then stillness."""
+    return lambda t: (peak * np.sin(np.pi * t / length) if t < length else 0.0, 0.0)
+
+
+def _swings(history, after):
+    """Each free swing after ``after`` s (between two impacts): (peak |theta|, duration)."""
+    t, th = history.time, history.rotation
+    keep = t > after
+    t, th = t[keep], th[keep]
+    land = np.flatnonzero(np.abs(th) < 1e-9)
+    out = []
+    for a, b in zip(land[:-1], land[1:], strict=True):
+        if b > a + 2:
+            out.append((np.abs(th[a:b + 1]).max(), t[b] - t[a]))
+    return out
+
+
+def test_a_block_stands_until_the_base_exceeds_g_tan_alpha_and_then_leans_away_from_it():
+    from dda.studies.references import housner_shaken
+
+    a = G * 0.15 / 0.45
+    assert housner_shaken(0.15, 0.45, lambda t: (0.99 * a, 0.0), 1.0).peak == 0.0
+    pushed = housner_shaken(0.15, 0.45, _pulse(1.2 * a), 0.4)
+    # a base accelerating to +x throws the block's top back (-x): it pivots on its left
+    # corner, counterclockwise, as a DDA block's rotation counts
+    assert pushed.peak > 0.0 and pushed.rotation.max() == pushed.peak
+    assert housner_shaken(0.15, 0.45, _pulse(-1.2 * a), 0.4).rotation.min() < 0.0
+
+
+def test_free_swings_after_a_pulse_lose_housners_share_at_each_impact():
+    """Between impacts no energy is lost; each impact keeps r^2 of it: the next swing's peak
+    is what :func:`housner_rocking` gives from this one's."""
+    from dda.studies.references import housner_rocking, housner_shaken
+
+    h = housner_shaken(0.15, 0.45, _pulse(6.0), 3.0)
+    swings = _swings(h, 0.2)
+    assert len(swings) >= 4
+    for (peak, _), (after, _) in zip(swings[:4], swings[1:5], strict=True):
+        # the peaks are the integrator's samples (max_step 1 ms): 1e-5 of the angle below
+        assert after == pytest.approx(housner_rocking(0.15, 0.45, peak, 1)[1], rel=2e-4)
+    lossless = _swings(housner_shaken(0.15, 0.45, _pulse(6.0), 3.0, restitution=1.0), 0.2)
+    peaks = [p for p, _ in lossless]
+    assert np.ptp(peaks) < 2e-4 * peaks[0]
+
+
+def test_a_slender_blocks_swing_lasts_housners_time():
+    """For a slender block (alpha 1.1 degrees) the swing between two impacts with peak theta
+    lasts 2 / p arccosh(1 / (1 - theta / alpha)), p^2 = 3 g / (4 R) (Housner 1963,
+    linearized: exact to about alpha^2)."""
+    from dda.studies.references import housner_shaken
+
+    w, h = 0.02, 1.0
+    alpha, p = np.arctan(w / h), np.sqrt(3 * G / (2 * np.hypot(w, h)))
+    swings = _swings(housner_shaken(w, h, _pulse(1.5 * G * w / h, 0.1), 4.0), 0.1)
+    assert len(swings) >= 3
+    for peak, length in swings[:3]:
+        assert length == pytest.approx(2 / p * np.arccosh(1 / (1 - peak / alpha)), rel=1e-3)
+
+
+def test_a_strong_enough_shaking_topples_the_block():
+    from dda.studies.cases import ramped_sine
+    from dda.studies.references import housner_shaken
+
+    assert housner_shaken(0.15, 0.45, lambda t: (2 * G, 0.0), 1.0).toppled
+    assert not housner_shaken(0.15, 0.45, ramped_sine(3, 700, stop=2.0), 3.0).toppled
+    assert housner_shaken(0.15, 0.45, ramped_sine(3, 1300, stop=2.0), 3.0).toppled

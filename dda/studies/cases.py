@@ -280,13 +280,16 @@ def shaken_incline(friction, table, dip: float = 20.0, penalty: float = 1e9,
 
 
 def rocking_block(tilt: float, penalty: float = 2e8, restitution: float = 1.0,
-                  width: float = 0.15, height: float = 0.45, phi: float = 36.4):
+                  width: float = 0.15, height: float = 0.45, phi: float = 36.4,
+                  table=None):
     """A ``width`` x ``height`` block of the stacked cubes' concrete (:func:`stacked_cubes`)
     released from rest on its right corner at ``tilt`` radians on a fixed base: Housner's
     rocking block (:func:`dda.studies.references.housner_rocking`). The joint has ``penalty``
     N/m normal and shear, friction ``phi`` degrees and the impact dashpot of ``restitution``
     (:class:`dda.contact.JointMaterial`). ``result.rotation`` of the block is then
-    ``tilt`` when it stands upright.
+    ``tilt`` when it stands upright. With ``table`` (an acceleration history, see
+    :func:`ramped_sine`) the base shakes: at ``tilt`` 0, the block of
+    :func:`dda.studies.references.housner_shaken`.
 
     Returns
     -------
@@ -302,6 +305,8 @@ def rocking_block(tilt: float, penalty: float = 2e8, restitution: float = 1.0,
     block = scene.add_block([tuple(map(float, p)) for p in corners], rock, name="block")
     scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(phi=phi),
                                   restitution=restitution))
+    if table is not None:
+        scene.shake(0, acceleration=table)
     return scene, block
 
 
