@@ -169,3 +169,10 @@ def test_a_strong_enough_shaking_topples_the_block():
     assert housner_shaken(0.15, 0.45, lambda t: (2 * G, 0.0), 1.0).toppled
     assert not housner_shaken(0.15, 0.45, ramped_sine(3, 700, stop=2.0), 3.0).toppled
     assert housner_shaken(0.15, 0.45, ramped_sine(3, 1300, stop=2.0), 3.0).toppled
+
+
+def test_housner_shaken_refuses_a_restitution_outside_0_to_1():
+    from dda.studies.references import housner_shaken
+
+    with pytest.raises(ValueError, match="restitution must be between 0 and 1"):
+        housner_shaken(0.15, 0.45, lambda t: (0.0, 0.0), 1.0, restitution=1.5)

@@ -327,6 +327,8 @@ def housner_shaken(width: float, height: float, acceleration: Callable, duration
     alpha = float(np.arctan2(width, height))
     r = housner_restitution(width, height) if restitution is None else finite_number(
         "restitution", restitution, where="housner_shaken")
+    if not 0.0 <= r <= 1.0:
+        raise ValueError(f"housner_shaken: restitution must be between 0 and 1, got {r!r}")
     p2 = 3.0 * g / (2.0 * np.hypot(width, height))  # 3 g / (4 R), R the half-diagonal
 
     def a_x(t):
