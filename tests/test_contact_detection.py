@@ -271,13 +271,45 @@ def test_a_sunk_corner_keeps_the_face_it_is_held_by_against_a_side_as_deep():
     # without the hysteresis (sunk depth 0) it moves on to the side, as before
     moved = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, 0.0)
     assert list(moved.edge[(moved.vertex == corner) & (moved.bk == 1)]) == [side]
-    # a side shallower by more than the sunk depth takes it (a block rotating round a
-    # corner deep inside it)
+    # a side shallower by more than the sunk depth would take it (a block rotating round a
+    # corner deep inside it), but the lower block's side crosses the upper's bottom, not its
+    # side: the overlap (2 mm over the whole face) is the bottom's to hold, which keeps it
     upper = box(-0.875e-3, 1.0 - 2.0e-3, 1.0, 1.0)
     x, offsets = stack(lower, upper)
     cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
+    assert list(cand.edge[(cand.vertex == corner) & (cand.bk == 1)]) == [side]
     kept = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, sunk)
-    assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [side]
+    assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [bottom]
+    # held by the side instead, 4 mm deep behind it and 2 mm behind the bottom, which its
+    # own side crosses: it moves on to the bottom
+    upper = box(-4e-3, 1.0 - 2.0e-3, 1.0, 1.0)
+    x, offsets = stack(lower, upper)
+    cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
+    assert list(cand.edge[(cand.vertex == corner) & (cand.bk == 1)]) == [bottom]
+    kept = keep_closed(cand, closed_v, np.array([side]), x, topo, d0, limit, 2, sunk)
+    assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [bottom]
+
+
+def test_a_sunk_corner_pressed_into_a_side_keeps_it_where_it_is_shallower_under_the_bottom():
+    """The L on a step of tests/stability (E/1e4, dt 1e-3, restitution 0): the step's corner
+    at the floor's level, pressed 2.3 mm into the L's leg through its side, sits 1.8 mm under
+    the leg's bottom as the L sinks into the floor. The narrow phase takes the bottom, the
+    shallower by more than the sunk depth; the step's own bottom edge crosses the leg's side
+    and neither of its edges the leg's bottom, so the closed contact keeps the side (moved to
+    the bottom, the side crossed the step 3.3 mm deep untracked)."""
+    step = box(0.0, 0.0, 0.3, 0.3)
+    leg = box(-0.0977, -1.8e-3, 0.1, 0.3)
+    x, offsets = stack(step, leg)
+    topo = VertexTopology.from_offsets(offsets)
+    corner = 0  # the step's (0, 0)
+    bottom, side = 4, 5  # the leg's edges from its lower left and lower right corners
+    d0, limit, sunk = 1e-4, 0.01, 0.22e-3
+    cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
+    assert list(cand.edge[(cand.vertex == corner) & (cand.bk == 1)]) == [bottom]
+    kept = keep_closed(cand, np.array([corner]), np.array([side]), x, topo, d0, limit, 2, sunk)
+    held = (kept.vertex == corner) & (kept.bk == 1)
+    assert list(kept.edge[held]) == [side]
+    assert kept.geometry.gap[held][0] == pytest.approx(-2.3e-3, rel=1e-6)
 
 
 def test_a_vertex_vertex_pair_across_another_joint_is_no_mirror():

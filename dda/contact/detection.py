@@ -284,7 +284,12 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
       and moves on to the next edge as before (:func:`dda.contact.contacts.carry_over`), and
       one that rotates round it deep inside the block (a block tipping over a stopper's
       corner 2 cm deep on a soft penalty) moves on once the new edge is the shallower by more
-      than the sunk depth. ``sunk_depth`` 0 turns this off.
+      than the sunk depth, unless the vertex's own edges still cross the contact's edge and
+      not the new one: then the overlap of the two blocks is bounded by the contact's edge,
+      and the new edge's depth is another contact's doing (a step's corner pressed 2.3 mm
+      into an L's side at the floor's level sits 1.8 mm under the L's bottom, as far as the
+      L sinks into the floor; moved to the bottom, it let the L's side cross the step 3.3 mm
+      deep untracked, ``tests/stability/test_impacts.py``). ``sunk_depth`` 0 turns this off.
     """
     if len(closed_vertex) == 0:
         return cand
@@ -322,7 +327,16 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
                                     topo.nxt).gap)
         # only a sunk vertex (deeper behind the new edge, its least deep, than the sunk
         # depth): the narrow phase's entrance rule judges the others
-        keep[t] &= over[t] & (-new_gap > hysteresis) & (new_gap - frame.gap[t] <= hysteresis)
+        # ... and however much shallower the new edge, while the vertex's own edges cross the
+        # contact's edge and not the new one: the overlap's boundary is the contact's edge,
+        # and the new edge's depth is another contact's (a step's corner pressed into an L's
+        # side, at the floor's level, sits under the L's bottom by as much as the L sinks into
+        # the floor; moved to the bottom, it let the side cross the step untracked)
+        v, f = closed_vertex[back[t]], cand.edge[turned_row]
+        entered = (_edges_at_cross(x, v, closed_edge[back[t]], topo)
+                   & ~_edges_at_cross(x, v, f, topo))
+        keep[t] &= (over[t] & (-new_gap > hysteresis)
+                    & ((new_gap - frame.gap[t] <= hysteresis) | entered))
     if not keep.any():
         return cand
     drop = turned_row[keep[len(lost):]]
@@ -343,6 +357,24 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
                                      for name in fields))
     return CandidateContacts(vertex=vertex[order], edge=edge[order], bj=blk[vertex[order]],
                              bk=bk[order], pairs=cand.pairs, geometry=geometry)
+
+
+def _edges_at_cross(x, vertex, edge, topo) -> np.ndarray:
+    """(k,) whether either edge at each ``vertex`` properly crosses its ``edge`` (of
+    another block)."""
+    c, d = x[edge], x[topo.nxt[edge]]
+    p = x[vertex]
+    out = np.zeros(len(vertex), dtype=bool)
+    for q in (x[topo.prv[vertex]], x[topo.nxt[vertex]]):
+        out |= ((_orient(p, q, c) * _orient(p, q, d) < 0.0)
+                & (_orient(c, d, p) * _orient(c, d, q) < 0.0))
+    return out
+
+
+def _orient(a, b, c) -> np.ndarray:
+    """(k,) twice the signed area of each triangle a b c."""
+    return ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+            - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
 
 @njit(cache=True)
