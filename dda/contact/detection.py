@@ -46,7 +46,7 @@ import numpy as np
 from numba import njit
 
 from dda.contact.kinematics import ContactGeometry, contact_geometry
-from dda.geometry import next_vertex_index, polygon_integrals
+from dda.geometry import _segments_cross, next_vertex_index, polygon_integrals
 from dda.kernels.geometry import vertex_turns
 
 __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts",
@@ -328,10 +328,7 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
         # only a sunk vertex (deeper behind the new edge, its least deep, than the sunk
         # depth): the narrow phase's entrance rule judges the others
         # ... and however much shallower the new edge, while the vertex's own edges cross the
-        # contact's edge and not the new one: the overlap's boundary is the contact's edge,
-        # and the new edge's depth is another contact's (a step's corner pressed into an L's
-        # side, at the floor's level, sits under the L's bottom by as much as the L sinks into
-        # the floor; moved to the bottom, it let the side cross the step untracked)
+        # contact's edge and not the new one (the docstring's L on a step)
         v, f = closed_vertex[back[t]], cand.edge[turned_row]
         entered = (_edges_at_cross(x, v, closed_edge[back[t]], topo)
                    & ~_edges_at_cross(x, v, f, topo))
@@ -362,19 +359,9 @@ def keep_closed(cand: CandidateContacts, closed_vertex, closed_edge, x, topo,
 def _edges_at_cross(x, vertex, edge, topo) -> np.ndarray:
     """(k,) whether either edge at each ``vertex`` properly crosses its ``edge`` (of
     another block)."""
-    c, d = x[edge], x[topo.nxt[edge]]
-    p = x[vertex]
-    out = np.zeros(len(vertex), dtype=bool)
-    for q in (x[topo.prv[vertex]], x[topo.nxt[vertex]]):
-        out |= ((_orient(p, q, c) * _orient(p, q, d) < 0.0)
-                & (_orient(c, d, p) * _orient(c, d, q) < 0.0))
-    return out
-
-
-def _orient(a, b, c) -> np.ndarray:
-    """(k,) twice the signed area of each triangle a b c."""
-    return ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
-            - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    c, d, p = x[edge], x[topo.nxt[edge]], x[vertex]
+    return (_segments_cross(p, x[topo.prv[vertex]], c, d, 0.0)
+            | _segments_cross(p, x[topo.nxt[vertex]], c, d, 0.0))
 
 
 @njit(cache=True)
