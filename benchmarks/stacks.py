@@ -55,8 +55,9 @@ def stack(n: int):
         for j in range(n):
             x, y = float(j), float(i)
             scene.add_block([(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)], rock)
+    # restitution 1: no impact dashpot, as Berkeley's C code (the same scene as its)
     scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
-                                  friction=CoulombSingle(phi=35.0)))
+                                  friction=CoulombSingle(phi=35.0), restitution=1.0))
     return scene
 
 

@@ -6,30 +6,38 @@ into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``)
 thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
 shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 
-With these defaults (0.3 s) the run takes about 42 s on two cores (1,778 steps, 55 of them
-cut because OPEN-CLOSE did not settle in 30 passes) and the face blocks end 25.5 mm (median)
-and 51.3 mm (most) from where they started relative to the base (1,654 steps, 68 cut, 27 / 51
-mm before the sparse structure was kept from step to step, which changed the round-off of
-the solves; 1,566 steps, 53 cut, 24 / 42 mm before detection judged "sunk" corners by their
-own pair's blocks and kept faces shared corner on corner). The
+With these defaults (0.3 s) the run takes about 65 s on two cores (1,320 steps, 73 of them
+cut because OPEN-CLOSE did not settle in 30 passes, 9.1 passes a step) and the face blocks
+end 22.4 mm (median) and 28.3 mm (most) from where they started relative to the base.
+Without the joints' impact dashpot (``restitution=1``, the default before issue 20's last
+part) it took 44 s (1,852 steps, 64 cut, 6.7 passes a step) and they moved 25.1 / 43.7 mm;
+before that, 1,778 steps, 55 cut, 25.5 / 51.3 mm before a sunk corner kept its closed
+contact's edge, 1,654 steps, 68 cut, 27 / 51 mm before the sparse structure was kept from
+step to step (the solves' round-off), and 1,566 steps, 53 cut, 24 / 42 mm before detection
+judged "sunk" corners by their own pair's blocks. The
 contacts settle only at a fraction of the 2e-3 s asked for (the contact period of a 1 x 1.6 m
-block is 1.8 ms, of the lightest block, 185 kg, 0.4 ms): the steps average 1.8e-4 s. Asked
+block is 1.8 ms, of the lightest block, 185 kg, 0.4 ms): the steps average 2.3e-4 s
+(1.6e-4 without the dashpot). Without the dashpot, asked
 for dt 1.25e-4 the face moved 25 / 41 mm, for 6.25e-5, 30 / 60 mm (issue 19's third part).
 The penalty (5e10 N/m, 540 times the lightest block's inertia at 2e-3 s) is stiff for dt, and
 ``dda.PenaltyWarning`` says so after 20 cuts.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``): blocks carry
 blocks here, so the penalty is twice the rock's Young's modulus, 2e10 N/m, at dt 2.4e-4 s (3
-times the lightest block's inertia), for both solvers. After 0.3 s the face blocks moved 26.5 /
-36.7 mm (legacy, 26 s of CPU, 1,298 steps, 4 cut) and 27.6 / 41.3 mm (Newton, 41 s, 1,389
-steps, 8 cut); before the sparse structure was kept from step to step, 25.8 / 41.7 and 27.1 /
-43.6 mm in the same steps: this slope is chaotic at the millimetre. The penalty sweep behind
+times the lightest block's inertia), for both solvers. After 0.3 s the face blocks moved 26.3 /
+33.1 mm (legacy, 32 s, 1,354 steps, 10 cut) and 24.3 / 36.4 mm (Newton, 61 s, 1,560 steps,
+17 cut, 2.2 iterations a step); without the impact dashpot 26.5 / 36.7 mm (legacy, 28 s,
+1,298 steps, 4 cut) and 27.6 / 41.3 mm (Newton, 44 s, 1,389 steps, 8 cut, 1.1 iterations a
+step), and before the sparse structure was kept from step to step, 25.8 / 41.7 and 27.1 /
+43.6 mm in the same steps: this slope is chaotic at the millimetre. (Wall times of the two
+solvers run side by side, one per core.) The penalty sweep behind
 that floor (legacy, 0.3 s, median / most): 55 / 85 mm at 2.2e9 N/m (the rule without the floor;
 57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: it is the penalty, not dt), 38 / 65 mm at 5e9,
 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10: joints softer than the rock make
 the whole mass softer and its face moves further. 10 s of shaking under ``--auto``: 11.2 min of
 CPU (legacy, 42,498 steps, 12 cut) and 16.0 min (Newton, 42,590 steps, 16 cut); 12.6 and 19.6
-min before issue 19's seventh part. (Before the detection fixes of the
+min before issue 19's seventh part; all without the impact dashpot, not rerun since.
+(Before the detection fixes of the
 session after issue 20's, the automatic run stopped at 0.09 s: detection lost faces where
 corners meet on continuous joints; without the floor it then ran 10 s in 4.3 (legacy) and 3.3
 (Newton) minutes, its face 0.91 / 1.59 and 1.76 / 3.20 m out.)

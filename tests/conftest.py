@@ -98,9 +98,10 @@ def shaken_block_scene(phi, amplitude, freq=2.0):
     return scene, table, top
 
 
-def stack_scene(n):
+def stack_scene(n, restitution=0.0):
     """The N x N stack of 1 m squares on a fixed base of ``benchmarks/stacks.py`` (E 10 GPa,
-    p 1e10 N/m, phi 35 degrees)."""
+    p 1e10 N/m, phi 35 degrees), with the joint's default impact dashpot; ``restitution=1``
+    takes it off, as the benchmark does (its scenes are Berkeley's C code's, which has none)."""
     stone = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
     scene = dda.Scene(gravity=9.81)
     scene.add_block([(-1.0, -1.0), (n + 1.0, -1.0), (n + 1.0, 0.0), (-1.0, 0.0)], stone,
@@ -109,5 +110,5 @@ def stack_scene(n):
         for j in range(n):
             scene.add_block([(j, i), (j + 1, i), (j + 1, i + 1), (j, i + 1)], stone)
     scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
-                                  friction=CoulombSingle(phi=35.0)))
+                                  friction=CoulombSingle(phi=35.0), restitution=restitution))
     return scene

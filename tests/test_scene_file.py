@@ -94,7 +94,7 @@ def test_a_full_scene_builds_what_the_api_would(tmp_path):
     assert scene._blocks[0].fixed
     pair = scene.joint_for(0, 1)
     assert isinstance(pair.friction, StaticDynamicTransition) and pair.normal_penalty == 2e9
-    assert pair.restitution == 0.2 and scene.joint_for(1, 2).restitution == 1.0
+    assert pair.restitution == 0.2 and scene.joint_for(1, 2).restitution == 0.0
     assert scene.joint_for(1, 2).friction.phi == 30.0
     assert isinstance(loaded.solver, LegacyPullBack)
     assert loaded.settings == {"dt": 1e-3, "max_open_close": 20}

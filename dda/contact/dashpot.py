@@ -2,8 +2,8 @@
 
 Without it a penalty impact loses energy only through Newmark's gamma = 1, so how much depends
 on dt and on the penalty (``benchmarks/impact_restitution.py``), and a rocking block's decay with
-it. A joint's ``restitution`` e sets a dashpot ``c`` per closed contact, in parallel with its
-normal spring ``p_n``:
+it. A joint's ``restitution`` e (0 by default, 1 for none) sets a dashpot ``c`` per closed
+contact, in parallel with its normal spring ``p_n``:
 
     c = 2 zeta sqrt(p_n m),   1 / m = sum over the contact's two blocks of (1/m_b + a_b^2 / I_b)
 

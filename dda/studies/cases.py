@@ -218,15 +218,21 @@ def ramped_sine(freq: float, amplitude_gal: float, ramp: float = 0.5,
     return accel
 
 
+def _joint(normal, shear, friction, restitution):
+    """A joint with the impact dashpot of ``restitution``, or the default one (None)."""
+    extra = {} if restitution is None else {"restitution": restitution}
+    return JointMaterial(normal_penalty=normal, shear_penalty=shear, friction=friction, **extra)
+
+
 def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: float = 36.4,
-                  restitution: float = 1.0):
+                  restitution: float | None = None):
     """Three 15 cm concrete cubes (7.4 kg each) stacked on a shaking table: A 3 and A 4(2).
 
     Unit weight 21.56 kN/m^3 (7.4 kg / 0.15^3 m^3), E 14.9 GPa, nu 0.2, joint friction
     ``phi`` degrees (A's single-block value), normal penalty ``penalty`` (A: 2e4 kN/m) and
-    shear penalty ``shear_ratio`` times it, the impact dashpot of ``restitution``
-    (:class:`dda.contact.JointMaterial`). The table is a fixed 1.2 m x 0.1 m block following
-    ``table`` (an acceleration history, see :func:`ramped_sine`).
+    shear penalty ``shear_ratio`` times it, the impact dashpot of ``restitution`` (None: the
+    joint's default, :class:`dda.contact.JointMaterial`). The table is a fixed 1.2 m x 0.1 m
+    block following ``table`` (an acceleration history, see :func:`ramped_sine`).
 
     Returns
     -------
@@ -240,8 +246,7 @@ def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: fl
     cubes = [scene.add_block([(-h, k * CUBE), (h, k * CUBE), (h, (k + 1) * CUBE),
                               (-h, (k + 1) * CUBE)], rock, name=f"cube{k + 1}")
              for k in range(3)]
-    scene.set_joint(JointMaterial(normal_penalty=penalty, shear_penalty=shear_ratio * penalty,
-                                  friction=CoulombSingle(phi=phi), restitution=restitution))
+    scene.set_joint(_joint(penalty, shear_ratio * penalty, CoulombSingle(phi=phi), restitution))
     scene.shake(base, acceleration=table)
     return scene, base, cubes
 
@@ -279,16 +284,16 @@ def shaken_incline(friction, table, dip: float = 20.0, penalty: float = 1e9,
     return scene, lower, block, (float(along[0]), float(along[1]))
 
 
-def rocking_block(tilt: float, penalty: float = 2e8, restitution: float = 1.0,
+def rocking_block(tilt: float, penalty: float = 2e8, restitution: float | None = None,
                   width: float = 0.15, height: float = 0.45, phi: float = 36.4,
                   table=None):
     """A ``width`` x ``height`` block of the stacked cubes' concrete (:func:`stacked_cubes`)
     released from rest on its right corner at ``tilt`` radians on a fixed base: Housner's
     rocking block (:func:`dda.studies.references.housner_rocking`). The joint has ``penalty``
     N/m normal and shear, friction ``phi`` degrees and the impact dashpot of ``restitution``
-    (:class:`dda.contact.JointMaterial`). ``result.rotation`` of the block is then
-    ``tilt`` when it stands upright. With ``table`` (an acceleration history, see
-    :func:`ramped_sine`) the base shakes: at ``tilt`` 0, the block of
+    (None: the joint's default, :class:`dda.contact.JointMaterial`). ``result.rotation`` of
+    the block is then ``tilt`` when it stands upright. With ``table`` (an acceleration
+    history, see :func:`ramped_sine`) the base shakes: at ``tilt`` 0, the block of
     :func:`dda.studies.references.housner_shaken`.
 
     Returns
@@ -303,8 +308,7 @@ def rocking_block(tilt: float, penalty: float = 2e8, restitution: float = 1.0,
     corners = np.array([(-width, 0.0), (0.0, 0.0), (0.0, height), (-width, height)])
     corners = corners @ np.array([[c, -s], [s, c]]) + [0.5 * width, 1e-7]
     block = scene.add_block([tuple(map(float, p)) for p in corners], rock, name="block")
-    scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(phi=phi),
-                                  restitution=restitution))
+    scene.set_joint(_joint(penalty, penalty, CoulombSingle(phi=phi), restitution))
     if table is not None:
         scene.shake(0, acceleration=table)
     return scene, block
