@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from dda.studies.cases import ramped_sine, stepped_table
+from dda.studies.cases import ramped_sine, sine_displacement, stacked_cubes, stepped_table
 
 
 def test_stepped_table_rises_in_steps_and_does_not_drift():
@@ -31,3 +31,24 @@ def test_ramped_sine_starts_and_stops_without_a_jump():
     assert np.abs([table(ti)[0] for ti in t]).max() == pytest.approx(7.0, rel=1e-4)
     assert table(4.0 - 1e-6)[0] == pytest.approx(0.0, abs=1e-6)
     assert table(4.5) == (0.0, 0.0)
+
+
+def test_sine_displacement_has_the_sine_acceleration_and_starts_moving():
+    """A's table: u = -(a / omega^2) sin(omega t); its second difference is a sin(omega t)
+    (to the finite difference's h^2), and it starts at 0 with the velocity -a / omega."""
+    u = sine_displacement(3.0, 700.0)
+    a, omega, h = 7.0, 6.0 * np.pi, 1e-4
+    assert u(0.0) == (0.0, 0.0)
+    for t in (0.05, 0.3, 1.234):
+        accel = (u(t + h)[0] - 2 * u(t)[0] + u(t - h)[0]) / h**2
+        assert accel == pytest.approx(a * np.sin(omega * t), abs=1e-5 * a)
+    assert (u(h)[0] - u(-h)[0]) / (2 * h) == pytest.approx(-a / omega, rel=1e-6)
+
+
+def test_stacked_cubes_take_one_table_motion():
+    scene, table, _ = stacked_cubes(displacement=sine_displacement(5.0, 400.0))
+    assert len(scene.motions) == 1 and len(scene.shakes) == 0
+    with pytest.raises(ValueError, match="one of the two"):
+        stacked_cubes()
+    with pytest.raises(ValueError, match="one of the two"):
+        stacked_cubes(ramped_sine(3.0, 400.0), displacement=sine_displacement(3.0, 400.0))

@@ -106,6 +106,20 @@ def test_stacked_cubes_example(tmp_path, capsys):
     assert runs[0]["outcome"] == "stable"
 
 
+def test_stacked_cubes_example_runs_akaos_own_settings(tmp_path, capsys):
+    """--akao: A's DDA settings (legacy, no dashpot, the table driven by a displacement sine
+    from t = 0) on the four cases of A's table 5, next to A's own DDA outcomes."""
+    runs = load("stacked_cubes").main(["--out", str(tmp_path), "--duration", "0.3", "--akao",
+                                       "--cases", "5:400"])
+    out = capsys.readouterr().out
+    assert "A's DDA settings: legacy DDA" in out and "restitution 1," in out
+    assert "of 1 agree with A's own DDA" in out
+    assert [r["akao_dda"] for r in runs] == ["moved"]
+    rows = csv_rows(tmp_path / "stacked_cubes.csv")
+    assert rows[0]["akao_dda_outcome"] == "moved"
+    assert runs[0]["status"] == "ok"
+
+
 def test_stacked_cubes_example_refuses_unknown_cases(tmp_path):
     with pytest.raises(SystemExit):
         load("stacked_cubes").main(["--out", str(tmp_path), "--cases", "4:300"])

@@ -11,7 +11,7 @@ from dda.materials import LinearElastic
 __all__ = ["shear_box", "shear_stress", "SHEAR_BOX_LENGTH", "moving_base", "relative_slip",
            "stepped_table", "rock_slope", "slide_down_dip", "SLOPE_DIP", "SLOPE_STOP",
            "ramped_sine", "stacked_cubes", "CUBE", "shaken_incline", "gap_until_stopper",
-           "rocking_block", "rocking_amplitudes"]
+           "rocking_block", "rocking_amplitudes", "sine_displacement"]
 
 G = 9.81
 
@@ -218,21 +218,41 @@ def ramped_sine(freq: float, amplitude_gal: float, ramp: float = 0.5,
     return accel
 
 
+def sine_displacement(freq: float, amplitude_gal: float):
+    """Table displacement ``t -> (u_x, 0)`` whose acceleration is a sine of ``freq`` Hz and
+    ``amplitude_gal`` from t = 0, as a displacement history drives a table in legacy DDA
+    (A, section 2):
+
+        u_x = -(a / omega^2) sin(omega t),   so   d2u_x/dt2 = a sin(omega t)
+
+    It starts at 0 with the velocity ``-a / omega``: the table jumps to it at the first step
+    (the acceleration history of :func:`ramped_sine` starts from rest instead).
+    """
+    amp = 0.01 * amplitude_gal
+    omega = 2 * np.pi * freq
+
+    def displacement(t):
+        return (-amp / omega**2 * np.sin(omega * t), 0.0)
+
+    return displacement
+
+
 def _joint(normal, shear, friction, restitution):
     """A joint with the impact dashpot of ``restitution``, or the default one (None)."""
     extra = {} if restitution is None else {"restitution": restitution}
     return JointMaterial(normal_penalty=normal, shear_penalty=shear, friction=friction, **extra)
 
 
-def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: float = 36.4,
-                  restitution: float | None = None):
+def stacked_cubes(table=None, penalty: float = 2e7, shear_ratio: float = 1.0,
+                  phi: float = 36.4, restitution: float | None = None, displacement=None):
     """Three 15 cm concrete cubes (7.4 kg each) stacked on a shaking table: A 3 and A 4(2).
 
     Unit weight 21.56 kN/m^3 (7.4 kg / 0.15^3 m^3), E 14.9 GPa, nu 0.2, joint friction
     ``phi`` degrees (A's single-block value), normal penalty ``penalty`` (A: 2e4 kN/m) and
     shear penalty ``shear_ratio`` times it, the impact dashpot of ``restitution`` (None: the
     joint's default, :class:`dda.contact.JointMaterial`). The table is a fixed 1.2 m x 0.1 m
-    block following ``table`` (an acceleration history, see :func:`ramped_sine`).
+    block following ``table`` (an acceleration history from rest, see :func:`ramped_sine`)
+    or ``displacement`` (``t -> (u_x, u_y)``, see :func:`sine_displacement`), one of the two.
 
     Returns
     -------
@@ -247,7 +267,13 @@ def stacked_cubes(table, penalty: float = 2e7, shear_ratio: float = 1.0, phi: fl
                               (-h, (k + 1) * CUBE)], rock, name=f"cube{k + 1}")
              for k in range(3)]
     scene.set_joint(_joint(penalty, shear_ratio * penalty, CoulombSingle(phi=phi), restitution))
-    scene.shake(base, acceleration=table)
+    if (table is None) == (displacement is None):
+        raise ValueError("stacked_cubes: give the table an acceleration history (table) or a "
+                         "displacement history (displacement), one of the two")
+    if table is not None:
+        scene.shake(base, acceleration=table)
+    else:
+        scene.prescribe_motion(base, displacement)
     return scene, base, cubes
 
 
