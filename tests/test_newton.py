@@ -94,3 +94,21 @@ def test_newton_halves_a_step_that_cycles_across_a_kink():
     finally:
         newton.LINE_SEARCH_HALVINGS = old
     assert not without.converged and "did not converge in 25" in without.reason
+
+
+def test_a_cycle_is_a_pattern_of_two_to_cycle_length_iterates_back():
+    """Newton's cycle test (dda.solvers.newton._seen_at): the same contact pattern two, three or
+    CYCLE_LENGTH accepted iterates back is a cycle (the pile of
+    tests/stability/test_newton_cycles.py cycled through 3 and 4); the last iterate's own
+    pattern (a step that changed no state) and one further back are not."""
+    from dda.solvers import newton
+    from dda.solvers.newton import _seen_at
+
+    a, b, c, d = (np.array([k], dtype=np.int8) for k in range(4))
+    assert _seen_at(a, [a, b]) == -2
+    assert _seen_at(a, [a, b, c]) == -3
+    assert _seen_at(a, [a, b, c, d]) == -4
+    assert _seen_at(b, [a, b]) is None
+    assert _seen_at(d, [a, b, c]) is None
+    longer = [a] + [np.array([k], dtype=np.int8) for k in range(10, 10 + newton.CYCLE_LENGTH)]
+    assert _seen_at(a, longer) is None
