@@ -6,7 +6,7 @@ into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``)
 thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
 shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 
-With these defaults (0.3 s) the run takes about 65 s on two cores (1,320 steps, 73 of them
+With these defaults (0.3 s) the run takes about 40 s on two cores (1,320 steps, 73 of them
 cut because OPEN-CLOSE did not settle in 30 passes, 9.1 passes a step) and the face blocks
 end 22.4 mm (median) and 28.3 mm (most) from where they started relative to the base.
 Without the joints' impact dashpot (``restitution=1``, the default before issue 20's last
