@@ -1,5 +1,7 @@
 """Shared scene builders for the tests."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -98,7 +100,7 @@ def shaken_block_scene(phi, amplitude, freq=2.0):
     return scene, table, top
 
 
-def stack_scene(n, restitution=0.0):
+def stack_scene(n, restitution=None):
     """The N x N stack of 1 m squares on a fixed base of ``benchmarks/stacks.py`` (E 10 GPa,
     p 1e10 N/m, phi 35 degrees), with the joint's default impact dashpot; ``restitution=1``
     takes it off, as the benchmark does (its scenes are Berkeley's C code's, which has none)."""
@@ -109,6 +111,7 @@ def stack_scene(n, restitution=0.0):
     for i in range(n):
         for j in range(n):
             scene.add_block([(j, i), (j + 1, i), (j + 1, i + 1), (j, i + 1)], stone)
-    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
-                                  friction=CoulombSingle(phi=35.0), restitution=restitution))
+    joint = JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                          friction=CoulombSingle(phi=35.0))
+    scene.set_joint(joint if restitution is None else replace(joint, restitution=restitution))
     return scene

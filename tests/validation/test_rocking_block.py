@@ -3,11 +3,11 @@
 A 15 x 45 cm concrete block released from half its critical tilt on a fixed base
 (:func:`dda.studies.cases.rocking_block`), 1.3 s: four impacts. With the joint's impact dashpot
 at ``restitution=0``, the default (the corner that strikes does not bounce, Housner's
-assumption), each
-impact keeps the share of the rocking amplitude that Housner's coefficient of restitution
-gives (:func:`dda.studies.references.housner_rocking`), within 5%, at dt 1e-3 and 1e-4 and
-under both solvers. Without the dashpot the same block keeps 19-25% more at dt 1e-4 than
-Housner: the penalty impact alone loses what Newmark's gamma = 1 takes, which depends on dt.
+assumption), each impact keeps the share of the rocking amplitude that Housner's coefficient
+of restitution gives (:func:`dda.studies.references.housner_rocking`), within 5%, at dt 1e-3
+and 1e-4 and under both solvers. Without the dashpot the same block keeps 19-25% more at dt
+1e-4 than Housner: the penalty impact alone loses what Newmark's gamma = 1 takes, which
+depends on dt.
 
 Measured (amplitude ratio per impact against Housner's, penalty 1e8 N/m):
 
