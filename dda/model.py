@@ -213,6 +213,13 @@ class Model:
                                         for m in partial]).reshape(-1)[self.spring_motion]
 
     # ------------------------------------------------------------------ lookups
+    @property
+    def plain_blocks(self) -> bool:
+        """Whether the blocks' system is stiffness, mass, gravity and stress alone: no
+        damping, point loads or constraint springs (a step then takes the compiled block
+        kernels of :mod:`dda.kernels.blocks`)."""
+        return self.damping is None and not len(self.load_block) and not len(self.spring_block)
+
     def block_label(self, i: int) -> str:
         """How messages name block ``i`` (its name, or its index)."""
         return str(self.scene.blocks[int(i)])

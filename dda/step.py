@@ -35,6 +35,8 @@ from dda.contact.detection import (
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.penetration import GuardReport, penetration_guard, released_depth
 from dda.errors import SimulationError
+from dda.kernels.blocks import step_end, step_start
+from dda.kernels.geometry import edge_terms
 from dda.model import Model
 from dda.profiling import section
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
@@ -42,6 +44,11 @@ from dda.solvers.newmark import effective_system, updated_velocity
 
 __all__ = ["StepSettings", "StepState", "StepReport", "step", "search_distance",
            "deepest_spring", "SEARCH_FACTOR"]
+
+# a scene whose blocks have no damping, loads or constraint springs takes the compiled block
+# kernels (dda.kernels.blocks: the numpy path's bits, 50 us less of a 2-block step); False
+# sends every scene through numpy (the reference the kernels are tested against)
+BLOCK_KERNELS = True
 
 # the search distance is this multiple of the step's predicted largest vertex displacement
 SEARCH_FACTOR = 2.5
@@ -152,19 +159,24 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     """
     settings = settings or StepSettings()
     t1 = state.time + dt
-    ints = geometry.polygon_integrals(state.x, model.offsets, model.topo.nxt)
-    k, m, c, f = model.block_forces(t1, ints, state.stress, state.load_points,
-                                    state.spring_points)
     # a static analysis carries no velocity: no inertial force term
     carry = settings.velocity_carry
-    v_eff = state.velocity * carry if carry else None
-    k_eff, f_eff = effective_system(k, m, f, v_eff, dt, c)
+    plain = BLOCK_KERNELS and model.plain_blocks
+    if plain:
+        ints, k_eff, f_eff, v_eff, speed = _plain_start(model, state, dt, carry)
+    else:
+        ints = geometry.polygon_integrals(state.x, model.offsets, model.topo.nxt)
+        k, m, c, f = model.block_forces(t1, ints, state.stress, state.load_points,
+                                        state.spring_points)
+        v_eff = state.velocity * carry if carry else None
+        k_eff, f_eff = effective_system(k, m, f, v_eff, dt, c)
+        speed = None
     known_u, known_v, shaking = model.known_motion(t1, state.known_u, state.shaking)
     d_known = np.zeros((model.n_blocks, 6))
     d_known[:, :2] = known_u - state.known_u
     d_known[model.free] = 0.0
     d0 = search_distance(model, state, dt, carry, ints.centroid, d_known[~model.free, :2],
-                         search_hint)
+                         search_hint, speed)
     found = _detect(model, state, d0, settings.penetration_tolerance)
     element = _element(model, state, found, ints, dt if carry else 0.0)
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
@@ -175,12 +187,17 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     costs = (problem.pattern.unknowns, found.n_pairs)
     if not sol.converged:
         return None, StepReport.of(sol, *costs)
-    move = geometry.vertex_displacements(state.x, ints.centroid[model.topo.block],
-                                         sol.d[model.topo.block])
-    refused = _check_moves(model, move, d0, settings.max_displacement_ratio)
+    if plain:
+        ended = _Ended(*step_end(state.x, model.topo.block, model.offsets, ints.centroid,
+                                 sol.d, model.free, model.size,
+                                 state.velocity if v_eff is None else v_eff, v_eff is not None,
+                                 2.0 / dt, model.elasticity, state.stress, state.rotation))
+    else:
+        ended = _ended(model, state, ints.centroid, sol.d)
+    refused = _refusal(model, ended, d0, settings.max_displacement_ratio)
     if refused is not None:
         return None, StepReport.of(sol, *costs, reason=refused[0], search_hint=refused[1])
-    x_new = state.x + move
+    x_new = ended.x_new
     with section("guard"):
         # no vertex moved farther than d0 (checked above), so the pairs whose boxes
         # overlap at the end of the step are among the detection's, grown by d0
@@ -191,22 +208,26 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     report = StepReport.of(sol, *costs, reason=guard.reason, guard=guard)
     if guard.reason:
         return None, report
-    trial = _advanced(model, state, dt, sol, ints.centroid, x_new, move, v_eff,
+    trial = _advanced(model, state, dt, sol, ints.centroid, ended, v_eff,
                       (known_u, known_v, d_known, shaking), guard)
     return trial, report
 
 
-def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0) -> float:
+def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0,
+                    speed=None) -> float:
     """How far from a vertex contacts are looked for in a step (m).
 
     ``SEARCH_FACTOR`` times the largest of the predicted vertex displacement (velocity times
     dt plus the fall under gravity), the known blocks' moves, the last step's largest move
     and the hint, plus a floor of 1e-6 of the smallest block. ``centroid`` are the blocks'
-    centroids at the step's start.
+    centroids at the step's start; ``speed``, the largest vertex speed ``|T(x) carry v|``
+    when it is known (:func:`dda.kernels.blocks.step_start`).
     """
-    t = geometry.t_matrix(state.x, centroid[model.topo.block])
-    vv = np.einsum("vij,vj->vi", t, state.velocity[model.topo.block] * carry)
-    predicted = np.hypot(vv[:, 0], vv[:, 1]).max() * dt if len(vv) else 0.0
+    if speed is None:
+        t = geometry.t_matrix(state.x, centroid[model.topo.block])
+        vv = np.einsum("vij,vj->vi", t, state.velocity[model.topo.block] * carry)
+        speed = np.hypot(vv[:, 0], vv[:, 1]).max() if len(vv) else 0.0
+    predicted = speed * dt
     predicted += 0.5 * abs(model.gravity or 0.0) * dt * dt
     if len(known_du):
         predicted = max(predicted, float(np.hypot(known_du[:, 0], known_du[:, 1]).max()))
@@ -297,40 +318,68 @@ def _contact_mass(model, ints, contacts, geom) -> np.ndarray:
                         mass[bk], inertia[bj], inertia[bk])
 
 
-def _check_moves(model, move, d0, max_ratio):
-    """None when the step's moves are acceptable, else ``(reason, search hint)``."""
+@dataclass(frozen=True)
+class _Ended:
+    """The blocks at the end of a step (:func:`dda.kernels.blocks.step_end`'s outputs)."""
+
+    move: np.ndarray
+    x_new: np.ndarray
+    largest: float
+    worst: int
+    worst_move: float
+    velocity: np.ndarray | None = None  # None: not updated yet (the numpy path)
+    stress: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    centroid: np.ndarray | None = None
+
+
+def _ended(model, state, centroid, d) -> _Ended:
+    """The vertex moves of ``d`` and what the checks need of them (numpy)."""
+    move = geometry.vertex_displacements(state.x, centroid[model.topo.block],
+                                         d[model.topo.block])
     distance = np.hypot(move[:, 0], move[:, 1])
-    largest = float(distance.max())
+    per_block = np.maximum.reduceat(distance, model.offsets[:-1])
+    ratio = np.where(model.free, per_block / model.size, 0.0)
+    worst = int(np.argmax(ratio))
+    return _Ended(move, state.x + move, float(distance.max()), worst, float(per_block[worst]))
+
+
+def _refusal(model, ended: _Ended, d0, max_ratio):
+    """None when the step's moves are acceptable, else ``(reason, search hint)``."""
+    largest = ended.largest
     # two blocks closing on each other close their gap by up to twice the largest move: a
     # vertex that moved more than half the search distance may have met an edge that was
     # not searched
     if 2.0 * largest > d0:
         return (f"a vertex moved {largest:.3g} m, more than half the contact search "
                 f"distance {d0:.3g} m", 2.0 * largest)
-    per_block = np.maximum.reduceat(distance, model.offsets[:-1])
-    ratio = np.where(model.free, per_block / model.size, 0.0)
-    worst = int(np.argmax(ratio))
-    if ratio[worst] > max_ratio:
-        return (f"{model.block_label(worst)} moved {per_block[worst]:.3g} m in one step, more "
+    worst, moved = ended.worst, ended.worst_move
+    if model.free[worst] and moved / model.size[worst] > max_ratio:
+        return (f"{model.block_label(worst)} moved {moved:.3g} m in one step, more "
                 f"than max_displacement_ratio {max_ratio:g} of its size "
                 f"{model.size[worst]:.3g} m", 0.0)
     return None
 
 
-def _advanced(model, state, dt, sol, centroid, x_new, move, v_eff, known,
+def _advanced(model, state, dt, sol, centroid, ended: _Ended, v_eff, known,
               guard) -> StepState:
     """The trial state at the end of an accepted step (Newmark update, METHOD.md s. 2)."""
     known_u, known_v, d_known, shaking = known
     d = sol.d
     free = model.free
-    vel = np.where(free[:, None], updated_velocity(d, v_eff, dt), 0.0)
+    if ended.velocity is None:
+        vel = np.where(free[:, None], updated_velocity(d, v_eff, dt), 0.0)
+        stress = state.stress + np.where(
+            free[:, None], np.einsum("bij,bj->bi", model.elasticity, d[:, 3:]), 0.0)
+        rotation, centroid_new = state.rotation + d[:, 2], centroid + d[:, :2]
+    else:
+        vel, stress = ended.velocity, ended.stress
+        rotation, centroid_new = ended.rotation, ended.centroid
     if model.rigid is not None:
         vel[model.rigid, 3:] = 0.0
     vel[~free, :2] = known_v[~free]
     for mo in model.full_motions:
         vel[mo.block, :2] = d_known[mo.block, :2] / dt
-    stress = state.stress + np.where(
-        free[:, None], np.einsum("bij,bj->bi", model.elasticity, d[:, 3:]), 0.0)
     load_points = state.load_points
     if len(model.load_block):
         load_points = load_points + geometry.vertex_displacements(
@@ -340,14 +389,28 @@ def _advanced(model, state, dt, sol, centroid, x_new, move, v_eff, known,
         spring_points = spring_points + geometry.vertex_displacements(
             spring_points, centroid[model.spring_block], d[model.spring_block])
     return StepState(
-        time=state.time + dt, x=x_new, velocity=vel, stress=stress,
-        rotation=state.rotation + d[:, 2],
+        time=state.time + dt, x=ended.x_new, velocity=vel, stress=stress,
+        rotation=rotation,
         # a step maps each block affinely, which carries its centroid by (u0, v0)
-        centroid=centroid + d[:, :2], contacts=sol.contacts, load_points=load_points,
+        centroid=centroid_new, contacts=sol.contacts, load_points=load_points,
         spring_points=spring_points, known_u=known_u, shaking=shaking,
-        last_move=float(np.max(np.hypot(move[:, 0], move[:, 1]))),
-        untracked=guard.untracked, penetration=guard.deepest,
+        last_move=ended.largest, untracked=guard.untracked, penetration=guard.deepest,
     )
+
+
+def _plain_start(model, state, dt, carry):
+    """The blocks' integrals, effective system, carried velocity (None in a static step) and
+    largest predicted vertex speed, from :func:`dda.kernels.blocks.step_start`."""
+    x = state.x
+    offsets = model.offsets
+    terms = edge_terms(x, offsets, model.topo.nxt)
+    s = np.add.reduceat(terms, offsets[:-1], axis=0)
+    area, centroid, sxx, syy, sxy, k_eff, f_eff, v_eff, speed = step_start(
+        s, x[offsets[:-1]], model.density, model.elasticity, float(model.gravity or 0.0),
+        state.stress, x, model.topo.block, state.velocity, float(carry), 2.0 / dt**2,
+        2.0 / dt, bool(carry))
+    ints = geometry.PolygonIntegrals(area=area, centroid=centroid, sxx=sxx, syy=syy, sxy=sxy)
+    return ints, k_eff, f_eff, (v_eff if carry else None), speed
 
 
 def _factors(solver):
