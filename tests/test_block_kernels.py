@@ -122,3 +122,34 @@ def test_a_scene_with_damping_loads_or_springs_keeps_the_numpy_path():
     assert dda.model.Model(scene).plain_blocks
     scene.set_damping(mass=1.0)
     assert not dda.model.Model(scene).plain_blocks
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_dashpot_kernel_is_the_numpy_contact_mass_and_dashpot(seed):
+    """Contacts between free blocks and with a block whose motion is known (infinite mass):
+    :func:`dda.kernels.dashpot.dashpot_stiffnesses` gives
+    :func:`dda.contact.dashpot.dashpot_stiffness` of :func:`contact_mass`, to the bit."""
+    from dda.contact.dashpot import contact_mass, dashpot_stiffness
+    from dda.kernels.dashpot import dashpot_stiffnesses
+
+    rng = np.random.default_rng(seed)
+    nb, m = 5, 30
+    centroid = rng.uniform(-10.0, 10.0, (nb, 2))
+    density, area = rng.uniform(1e3, 3e3, nb), rng.uniform(0.01, 4.0, nb)
+    sxx, syy = rng.uniform(1e-4, 2.0, nb), rng.uniform(1e-4, 2.0, nb)
+    free = np.array([False, True, True, True, False])
+    bj, bk = rng.integers(1, 4, m), rng.integers(0, nb, m)
+    point = centroid[bj] + rng.normal(0.0, 0.5, (m, 2))
+    angle = rng.uniform(0.0, 2 * np.pi, m)
+    normal = np.stack([np.cos(angle), np.sin(angle)], axis=1)
+    zeta, pn, dt = rng.uniform(0.0, 1.0, m), 10.0 ** rng.uniform(6, 11, m), 1e-3
+
+    mass = np.where(free, density * area, np.inf)
+    inertia = np.where(free, density * (sxx + syy), np.inf)
+    expected = dashpot_stiffness(zeta, pn, contact_mass(
+        point, normal, centroid[bj], centroid[bk], mass[bj], mass[bk], inertia[bj],
+        inertia[bk]), dt)
+    got = dashpot_stiffnesses(zeta, pn, point, normal, bj, bk, centroid, free, density, area,
+                              sxx, syy, dt)
+    np.testing.assert_array_equal(got, expected)
+    assert np.all(np.isfinite(got)) and np.all(got >= 0.0)

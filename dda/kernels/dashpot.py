@@ -1,0 +1,43 @@
+"""Compiled impact dashpots of a step's contacts (:mod:`dda.contact.dashpot`).
+
+:func:`dda.contact.dashpot.contact_mass` and :func:`dda.contact.dashpot.dashpot_stiffness` in
+one pass over the contacts, with their arithmetic in their order (the same bits; a dozen small
+array operations a step, 15 us on a 2-block scene, against 2 here).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = ["dashpot_stiffnesses"]
+
+
+@njit(cache=True)
+def dashpot_stiffnesses(zeta, normal_penalty, point, normal, bj, bk, centroid, free, density,
+                        area, sxx, syy, dt):
+    """(m,) each contact's dashpot ``c / dt = 2 zeta sqrt(p_n m) / dt`` with the contact mass
+    ``1 / m = sum_b (1 / m_b + a_b^2 / I_b)`` over its blocks, ``a_b = (x - x_b) x n``,
+    ``m_b = rho A`` and ``I_b = rho (Sxx + Syy)`` (infinite for a block whose motion is
+    known)."""
+    m = point.shape[0]
+    out = np.empty(m)
+    for c in range(m):
+        inverse = 0.0
+        for side in range(2):
+            b = bj[c] if side == 0 else bk[c]
+            if free[b]:
+                mass = density[b] * area[b]
+                inertia = density[b] * (sxx[b] + syy[b])
+            else:
+                mass = np.inf
+                inertia = np.inf
+            r0 = point[c, 0] - centroid[b, 0]
+            r1 = point[c, 1] - centroid[b, 1]
+            arm = r0 * normal[c, 1] - r1 * normal[c, 0]
+            inverse = inverse + (1.0 / mass + arm * arm / inertia)
+        mass_c = 1.0 / inverse
+        out[c] = 2.0 * zeta[c] * math.sqrt(normal_penalty[c] * mass_c) / dt
+    return out
