@@ -15,11 +15,16 @@
   iteration (``dda.contact.element.KERNEL_LAWS`` switches them off);
 - :mod:`dda.kernels.faces`: contacts grouped into faces;
 - :mod:`dda.kernels.geometry`: polygon integrals, the turn and bisector of every vertex;
-- :mod:`dda.kernels.forces`: the recorder's force sums per block pair.
+- :mod:`dda.kernels.forces`: the recorder's force sums per block pair;
+- :mod:`dda.kernels.blocks`: a step's start (the blocks' integrals, matrices, Newmark
+  effective system, predicted vertex speed) and end (vertex moves, their checks, the Newmark
+  update), for blocks without damping, loads or constraint springs
+  (``dda.step.BLOCK_KERNELS`` switches them off);
+- :mod:`dda.kernels.dashpot`: each contact's impact dashpot.
 
-The kinematics, friction, OPEN-CLOSE, faces, geometry and forces kernels give the numbers of
-the numpy code they replaced, to the bit (the tests compare them): on the few contacts of a small
-scene numpy's per-call overhead, not the arithmetic, was the cost.
+The kinematics, friction, OPEN-CLOSE, faces, geometry, forces, blocks and dashpot kernels give
+the numbers of the numpy code they replaced, to the bit (the tests compare them): on the few
+contacts of a small scene numpy's per-call overhead, not the arithmetic, was the cost.
 
 The kernels compile on their first call (``cache=True``: once per machine, then loaded from
 ``__pycache__``).
