@@ -23,6 +23,8 @@ import math
 import numpy as np
 from numba import njit
 
+from dda.kernels.geometry import moments_about_centroid
+
 __all__ = ["step_start", "step_end"]
 
 
@@ -59,26 +61,13 @@ def step_start(s, first, density, elasticity, gravity, stress, x, block, velocit
     speed : the largest ``|T(x) carry v|`` over the vertices
     """
     nb = s.shape[0]
-    area = np.empty(nb)
-    centroid = np.empty((nb, 2))
-    sxx = np.empty(nb)
-    syy = np.empty(nb)
-    sxy = np.empty(nb)
+    area, centroid, sxx, syy, sxy = moments_about_centroid(s, first)
     m = np.zeros((nb, 6, 6))
     k_eff = np.empty((nb, 6, 6))
     f_eff = np.zeros((nb, 6))
     v_eff = np.empty((nb, 6))
     for b in range(nb):
-        a = s[b, 0] / 2.0
-        cx = s[b, 1] / 6.0 / a
-        cy = s[b, 2] / 6.0 / a
-        area[b] = a
-        xx = s[b, 3] / 12.0 - a * cx * cx
-        yy = s[b, 4] / 12.0 - a * cy * cy
-        xy = s[b, 5] / 24.0 - a * cx * cy
-        sxx[b], syy[b], sxy[b] = xx, yy, xy
-        centroid[b, 0] = first[b, 0] + cx
-        centroid[b, 1] = first[b, 1] + cy
+        a, xx, yy, xy = area[b], sxx[b], syy[b], sxy[b]
         rho = density[b]
         m[b, 0, 0] = a * rho
         m[b, 1, 1] = a * rho
