@@ -93,12 +93,19 @@ def polygon_integrals(vertices: np.ndarray, offsets: np.ndarray,
         nxt = next_vertex_index(offsets)
     vertices = np.ascontiguousarray(vertices, dtype=np.float64)
     offsets = np.asarray(offsets, dtype=np.int64)
-    # the terms and the moments compiled (the same arithmetic in the same order: the same
-    # bits as numpy's, six times faster on a few blocks); the sums stay numpy's
-    terms = edge_terms(vertices, offsets, np.asarray(nxt, dtype=np.int64))
-    s = np.add.reduceat(terms, offsets[:-1], axis=0)
+    s = edge_sums(vertices, offsets, nxt)
     area, centroid, sxx, syy, sxy = moments_about_centroid(s, vertices[offsets[:-1]])
     return PolygonIntegrals(area=area, centroid=centroid, sxx=sxx, syy=syy, sxy=sxy)
+
+
+def edge_sums(vertices: np.ndarray, offsets: np.ndarray, nxt: np.ndarray) -> np.ndarray:
+    """(n_blocks, 6) each block's edge terms of :func:`polygon_integrals`, summed: ``sum c``,
+    ``sum c (x1 + x2)``, ... from the block's first vertex (float64 contiguous ``vertices``,
+    int64 ``offsets``)."""
+    # the terms compiled (the same arithmetic in the same order: the same bits as numpy's,
+    # six times faster on a few blocks); the sums stay numpy's
+    terms = edge_terms(vertices, offsets, np.asarray(nxt, dtype=np.int64))
+    return np.add.reduceat(terms, offsets[:-1], axis=0)
 
 
 def t_matrix(points: np.ndarray, centroids: np.ndarray) -> np.ndarray:

@@ -37,7 +37,6 @@ from dda.contact.penetration import GuardReport, penetration_guard, released_dep
 from dda.errors import SimulationError
 from dda.kernels.blocks import step_end, step_start
 from dda.kernels.dashpot import dashpot_stiffnesses
-from dda.kernels.geometry import edge_terms
 from dda.kernels.open_close import as_float64
 from dda.model import Model
 from dda.profiling import section
@@ -194,7 +193,8 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
         ended = _Ended(*step_end(state.x, model.topo.block, model.offsets, ints.centroid,
                                  sol.d, model.free, model.size,
                                  state.velocity if v_eff is None else v_eff, v_eff is not None,
-                                 2.0 / dt, model.elasticity, state.stress, state.rotation))
+                                 2.0 / dt, model.elasticity, state.stress,
+                                 state.rotation)[1:])  # (the moves themselves: unused)
     else:
         ended = _ended(model, state, ints.centroid, sol.d)
     refused = _refusal(model, ended, d0, settings.max_displacement_ratio)
@@ -332,7 +332,6 @@ def _contact_mass(model, ints, contacts, geom) -> np.ndarray:
 class _Ended:
     """The blocks at the end of a step (:func:`dda.kernels.blocks.step_end`'s outputs)."""
 
-    move: np.ndarray
     x_new: np.ndarray
     largest: float
     worst: int
@@ -351,7 +350,7 @@ def _ended(model, state, centroid, d) -> _Ended:
     per_block = np.maximum.reduceat(distance, model.offsets[:-1])
     ratio = np.where(model.free, per_block / model.size, 0.0)
     worst = int(np.argmax(ratio))
-    return _Ended(move, state.x + move, float(distance.max()), worst, float(per_block[worst]))
+    return _Ended(state.x + move, float(distance.max()), worst, float(per_block[worst]))
 
 
 def _refusal(model, ended: _Ended, d0, max_ratio):
@@ -413,8 +412,7 @@ def _plain_start(model, state, dt, carry):
     largest predicted vertex speed, from :func:`dda.kernels.blocks.step_start`."""
     x = state.x
     offsets = model.offsets
-    terms = edge_terms(x, offsets, model.topo.nxt)
-    s = np.add.reduceat(terms, offsets[:-1], axis=0)
+    s = geometry.edge_sums(x, offsets, model.topo.nxt)
     area, centroid, sxx, syy, sxy, k_eff, f_eff, v_eff, speed = step_start(
         s, x[offsets[:-1]], model.density, model.elasticity, float(model.gravity or 0.0),
         state.stress, x, model.topo.block, state.velocity, float(carry), 2.0 / dt**2,
