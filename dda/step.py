@@ -33,7 +33,7 @@ from dda.contact.detection import (
     narrow_phase,
 )
 from dda.contact.element import ContactElement, LawGroups
-from dda.contact.penetration import GuardReport, penetration_guard, released_depth
+from dda.contact.penetration import GuardReport, penetration_guard
 from dda.errors import SimulationError
 from dda.kernels.blocks import step_end, step_start
 from dda.kernels.dashpot import dashpot_stiffnesses
@@ -204,10 +204,9 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     with section("guard"):
         # no vertex moved farther than d0 (checked above), so the pairs whose boxes
         # overlap at the end of the step are among the detection's, grown by d0
-        released = (None if element.dashpot is None else
-                    released_depth(x_new, sol.contacts, model.topo, element.dashpot > 0.0))
         guard = penetration_guard(model, x_new, sol.contacts, element.normal_penalty,
-                                  found.pairs, settings.penetration_tolerance, released)
+                                  found.pairs, settings.penetration_tolerance,
+                                  dashpot=element.dashpot)
     report = StepReport.of(sol, *costs, reason=guard.reason, guard=guard)
     if guard.reason:
         return None, report

@@ -48,6 +48,7 @@ from numba import njit
 from dda.contact.kinematics import ContactGeometry, contact_geometry
 from dda.geometry import _segments_cross, next_vertex_index, polygon_integrals
 from dda.kernels.geometry import vertex_turns
+from dda.kernels.kinematics import _frame
 
 __all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts",
            "inside_depth", "keep_closed"]
@@ -554,6 +555,17 @@ def narrow_phase(
     if len(pairs) == 0:
         return _empty_candidates(len(pairs))
     x = np.ascontiguousarray(x, dtype=np.float64)
+    if NARROW_KERNEL:
+        (vertex, edge, bj, bk, p1, p2, p3, length, tau, normal, gap,
+         xi) = _narrow_phase_kernel(x, topo.offsets, topo.nxt, topo.prv, topo.block,
+                                    np.ascontiguousarray(pairs, dtype=np.int64), boxes, margin,
+                                    search_distance, penetration_limit,
+                                    _per_block(sunk_depth, len(topo.offsets) - 1))
+        if len(vertex) == 0:
+            return _empty_candidates(len(pairs))
+        return CandidateContacts(vertex=vertex, edge=edge, bj=bj, bk=bk, pairs=len(pairs),
+                                 geometry=ContactGeometry(p1, p2, p3, length, tau, normal, gap,
+                                                          xi))
     cross, scale, _, bisector = topo.turns(x)
     vertex, edge, kblock, on_edge, sunk = _narrow_kernel(
         x, topo.offsets, topo.nxt, topo.prv, np.ascontiguousarray(pairs, dtype=np.int64),
@@ -577,6 +589,62 @@ def narrow_phase(
         frame.normal[r], frame.gap[r], frame.xi[r])
     return CandidateContacts(vertex=c.vertex, edge=c.edge, bj=topo.block[c.vertex],
                              bk=c.kblock, pairs=len(pairs), geometry=geometry)
+
+
+NARROW_KERNEL = True
+"""Whether :func:`narrow_phase` runs as one compiled pass (:func:`_narrow_phase_kernel`); False
+composes it of :func:`_narrow_kernel`, numpy and :func:`_mirrored_kernel` (the same
+candidates, to the bit)."""
+
+
+@njit(cache=True)
+def _narrow_phase_kernel(x, offsets, nxt, prv, block, pairs, boxes, margin, search_distance,
+                         penetration_limit, sunk_depths):
+    """:func:`narrow_phase` after the broad phase in one compiled pass: the vertices' turns,
+    :func:`_narrow_kernel`, the candidates sorted by vertex then block (stably), their frames
+    (:func:`dda.kernels.kinematics.frames`' arithmetic) and scores, and the mirrored
+    vertex-vertex pairs dropped (:func:`_mirrored_kernel`). Returns vertex, edge, the two
+    blocks and the frame (p1, p2, p3, length, tau, normal, gap, xi) of each candidate."""
+    cross, scale, _, bisector = vertex_turns(x, prv, nxt)
+    vertex, edge, kblock, on_edge, sunk = _narrow_kernel(
+        x, offsets, nxt, prv, pairs, boxes, margin, cross < 0.0, cross > 1e-9 * scale,
+        bisector, search_distance, penetration_limit, sunk_depths)
+    n = vertex.shape[0]
+    order = np.argsort(vertex * offsets.shape[0] + kblock, kind="mergesort")
+    p1 = np.empty((n, 2))
+    p2 = np.empty((n, 2))
+    p3 = np.empty((n, 2))
+    length = np.empty(n)
+    tau = np.empty((n, 2))
+    normal = np.empty((n, 2))
+    gap = np.empty(n)
+    xi = np.empty(n)
+    score = np.empty(n)
+    v_s = np.empty(n, dtype=np.int64)
+    e_s = np.empty(n, dtype=np.int64)
+    k_s = np.empty(n, dtype=np.int64)
+    on_s = np.empty(n, dtype=np.bool_)
+    sunk_s = np.empty(n, dtype=np.bool_)
+    for r in range(n):
+        i = order[r]
+        v, e = vertex[i], edge[i]
+        f = nxt[e]
+        v_s[r], e_s[r], k_s[r], on_s[r], sunk_s[r] = v, e, kblock[i], on_edge[i], sunk[i]
+        p1[r, 0], p1[r, 1] = x[v, 0], x[v, 1]
+        p2[r, 0], p2[r, 1] = x[f, 0], x[f, 1]
+        p3[r, 0], p3[r, 1] = x[e, 0], x[e, 1]
+        ln, t0, t1, n0, n1, g, xr = _frame(x[v, 0], x[v, 1], x[f, 0], x[f, 1], x[e, 0],
+                                           x[e, 1])
+        length[r], tau[r, 0], tau[r, 1], normal[r, 0], normal[r, 1] = ln, t0, t1, n0, n1
+        gap[r], xi[r] = g, xr
+        score[r] = -((0.0 + n0 * bisector[v, 0]) + n1 * bisector[v, 1])
+    drop = _mirrored_kernel(v_s, e_s, xi, p1, score, on_s, sunk_s, x, nxt, margin)
+    keep = np.flatnonzero(~drop)
+    if keep.shape[0] == n:
+        return (v_s, e_s, block[v_s], k_s, p1, p2, p3, length, tau, normal, gap, xi)
+    v_k = v_s[keep]
+    return (v_k, e_s[keep], block[v_k], k_s[keep], p1[keep], p2[keep], p3[keep],
+            length[keep], tau[keep], normal[keep], gap[keep], xi[keep])
 
 
 @dataclass

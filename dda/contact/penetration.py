@@ -32,10 +32,13 @@ from numba import njit
 from dda.contact.contacts import OPEN, STICK
 from dda.contact.detection import (
     VertexTopology,
+    _boxes,
     _corners_inside_kernel,
     bounding_boxes,
     broad_phase,
 )
+from dda.kernels.geometry import vertex_turns
+from dda.kernels.kinematics import _frame
 
 __all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
            "edge_penetrations", "untracked_depth", "untracked_edge_depth",
@@ -355,19 +358,47 @@ class GuardReport:
     untracked: float = 0.0
 
 
+GUARD_KERNEL = True
+"""Whether :func:`penetration_guard` runs as one compiled pass (:func:`_guard_kernel`); False
+composes it from the functions above (the same numbers, to the bit)."""
+
+
 def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
-                      tolerance: float, released=None) -> GuardReport:
+                      tolerance: float, released=None, dashpot=None) -> GuardReport:
     """The penetration guard on a trial configuration ``x_new`` of ``model``'s blocks.
 
     ``contacts`` are the trial's contacts, ``normal_penalty`` their p_n, ``pairs`` the block
     pairs whose boxes may overlap; ``tolerance`` is a fraction of the thinner block's
     half-width (:attr:`dda.model.Model.thickness`); ``released`` the depths at which open
-    contacts an impact dashpot let go hold their vertices (:func:`released_depth`).
+    contacts an impact dashpot let go hold their vertices (:func:`released_depth`), or
+    ``dashpot``, each contact's impact dashpot (``c / dt``, or None: none), from which the
+    guard finds them itself.
     """
     if model.n_blocks < 2:
         return GuardReport()
-    contacts = _holding(contacts, normal_penalty, released)
     topo = model.topo
+    if GUARD_KERNEL and released is None:
+        c = contacts
+        m = len(c)
+        has_dashpot = dashpot is not None
+        ints = [np.ascontiguousarray(a, dtype=np.int64)
+                for a in (c.vertex, c.edge, c.bj, c.bk, pairs)]
+        (deepest, spring, untracked, on_edge, v, k, depth,
+         tol) = _guard_kernel(np.ascontiguousarray(x_new, dtype=np.float64), model.offsets,
+                              topo.nxt, topo.prv, topo.block, model.thickness,
+                              float(tolerance), float(model.min_thickness),
+                              np.ascontiguousarray(c.state, dtype=np.int8),
+                              np.ascontiguousarray(c.t_n, dtype=np.float64),
+                              np.ascontiguousarray(normal_penalty, dtype=np.float64),
+                              (np.ascontiguousarray(dashpot, dtype=np.float64) if has_dashpot
+                               else np.zeros(m)), has_dashpot, *ints)
+        if not untracked > 1.0:
+            return GuardReport("", deepest, spring, untracked)
+        return GuardReport(_untracked_reason(model, x_new, on_edge, v, k, depth, tol),
+                           deepest, spring, untracked)
+    if released is None and dashpot is not None:
+        released = released_depth(x_new, contacts, topo, np.asarray(dashpot) > 0.0)
+    contacts = _holding(contacts, normal_penalty, released)
     boxes = bounding_boxes(x_new, topo.offsets)
     pen = vertex_penetrations(x_new, topo, pairs=pairs, boxes=boxes)
     # an edge shallower than a quarter of the smallest tolerance is untracked by less than
@@ -399,7 +430,15 @@ def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
     on_edge = worst_e > worst
     p, r, t = (edges, ratio_e, tol_e) if on_edge else (pen, ratio, tol)
     i = int(np.argmax(r))
-    v = int(p.vertex[i])
+    reason = _untracked_reason(model, x_new, on_edge, int(p.vertex[i]), int(p.block[i]),
+                               float(p.depth[i]), float(t[i]))
+    return GuardReport(reason, deepest, spring, untracked)
+
+
+def _untracked_reason(model, x_new, on_edge, v, k, depth, tol) -> str:
+    """Why the guard refuses a step: the worst untracked penetration, vertex (or, with
+    ``on_edge``, the edge from) ``v`` at ``depth`` inside block ``k``."""
+    topo = model.topo
     j = int(topo.block[v])
     local = v - int(model.offsets[j])
     if on_edge:
@@ -410,7 +449,93 @@ def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
     else:
         what = (f"vertex {local} of {model.block_label(j)} (at {x_new[v, 0]:.6g}, "
                 f"{x_new[v, 1]:.6g})")
-    reason = (f"untracked penetration: {what} is {p.depth[i]:.3g} m inside "
-              f"{model.block_label(p.block[i])}, and no closed contact holds it "
-              f"(tolerance {t[i]:.3g} m)")
-    return GuardReport(reason, deepest, spring, untracked)
+    return (f"untracked penetration: {what} is {depth:.3g} m inside "
+            f"{model.block_label(k)}, and no closed contact holds it "
+            f"(tolerance {tol:.3g} m)")
+
+
+@njit(cache=True)
+def _guard_kernel(x, offsets, nxt, prv, block_of, thickness, tolerance, min_thickness, state,
+                  t_n, normal_penalty, dashpot, has_dashpot, vertex, edge, bj, bk, pairs):
+    """:func:`penetration_guard` in one compiled pass, the composed version's arithmetic:
+    the released depths (:func:`released_depth`) held as closed springs (:func:`_holding`),
+    the corners and edge midpoints inside another block, and each one's untracked depth
+    over its tolerance. Returns the deepest penetration, the deepest spring, the worst
+    ratio (-inf when nothing is inside) and, for the worst, whether it is an edge, its
+    vertex, block, depth and tolerance."""
+    m = state.shape[0]
+    st = state.copy()
+    tn = t_n.copy()
+    if has_dashpot:
+        for c in range(m):
+            if state[c] == 0 and dashpot[c] > 0.0:
+                v, e = vertex[c], edge[c]
+                f = nxt[e]
+                g = _frame(x[v, 0], x[v, 1], x[f, 0], x[f, 1], x[e, 0], x[e, 1])[5]
+                released = max(-g, 0.0)
+                if released > 0.0:
+                    st[c] = 1
+                    tn[c] = -normal_penalty[c] * released
+    spring = 0.0
+    for c in range(m):
+        if st[c] != 0:
+            s = -tn[c] / normal_penalty[c]
+            if not spring >= s:
+                spring = s
+    boxes = _boxes(x, offsets)
+    cross, scale, dot, _ = vertex_turns(x, prv, nxt)
+    corner = ~((np.abs(cross) <= 1e-9 * scale) & (dot < 0.0))
+    nb = offsets.shape[0] - 1
+    if pairs.shape[0] == 0:
+        return 0.0, spring, 0.0, False, -1, -1, 0.0, 0.0
+    pv, pk, pd, _ = _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, 0.0, False)
+    ev, ek, ed, _ = _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner,
+                                           0.25 * tolerance * min_thickness, True)
+    deepest = 0.0
+    if pd.shape[0]:
+        deepest = pd.max()
+    if ed.shape[0]:
+        e_deepest = ed.max()
+        if e_deepest > deepest:
+            deepest = e_deepest
+    if pd.shape[0] == 0 and ed.shape[0] == 0:
+        return deepest, spring, 0.0, False, -1, -1, 0.0, 0.0
+    worst, wi = -np.inf, -1
+    if pd.shape[0]:
+        left = _untracked_kernel(st, tn, normal_penalty, pd, pv, pk, vertex, edge, bj, bk,
+                                 nxt, nb + 1)
+        for i in range(pd.shape[0]):
+            r = left[i] / (tolerance * min(thickness[block_of[pv[i]]], thickness[pk[i]]))
+            if r > worst or wi < 0:
+                worst, wi = r, i
+    worst_e, we = -np.inf, -1
+    if ed.shape[0]:
+        zero = np.zeros(ed.shape[0])
+        held = np.maximum(-_untracked_kernel(st, tn, normal_penalty, zero, ev, ek, vertex, edge,
+                                             bj, bk, nxt, nb + 1),
+                          -_untracked_kernel(st, tn, normal_penalty, zero, nxt[ev], ek, vertex,
+                                             edge, bj, bk, nxt, nb + 1))
+        n_closed = 0
+        for c in range(m):
+            if st[c] != 0:
+                n_closed += 1
+        if n_closed:
+            keys = np.empty(n_closed, dtype=np.int64)
+            springs = np.empty(n_closed)
+            q = 0
+            for c in range(m):
+                if st[c] != 0:
+                    keys[q] = edge[c] * (nb + 1) + bj[c]
+                    springs[q] = -tn[c] / normal_penalty[c]
+                    q += 1
+            held = np.maximum(held, _gather_kernel(keys, springs, ev * (nb + 1) + ek, True))
+        for i in range(ed.shape[0]):
+            r = (ed[i] - held[i]) / (tolerance * min(thickness[block_of[ev[i]]],
+                                                     thickness[ek[i]]))
+            if r > worst_e or we < 0:
+                worst_e, we = r, i
+    if worst_e > worst:
+        return (deepest, spring, worst_e, True, ev[we], ek[we], ed[we],
+                tolerance * min(thickness[block_of[ev[we]]], thickness[ek[we]]))
+    return (deepest, spring, worst, False, pv[wi], pk[wi], pd[wi],
+            tolerance * min(thickness[block_of[pv[wi]]], thickness[pk[wi]]))

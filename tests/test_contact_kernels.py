@@ -1,0 +1,203 @@
+"""The contact side of a step compiled, against the versions composed of numpy and smaller
+kernels: the penetration guard as one pass (``penetration._guard_kernel``, ``GUARD_KERNEL``)
+and the narrow phase as one pass (``detection._narrow_phase_kernel``, ``NARROW_KERNEL``). The
+same reports and candidates, to the bit, on random overlapping blocks with random contacts
+(released dashpot contacts included), on stacks whose corners meet, and on whole runs."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import dda
+from dda.contact import detection, penetration
+from dda.contact.contacts import ContactSet
+from dda.contact.detection import VertexTopology, bounding_boxes, broad_phase, narrow_phase
+from dda.contact.penetration import GuardReport, penetration_guard
+from dda.registry import make_solver
+from tests.stability import scenes as S
+
+
+def _polygon(rng, cx, cy):
+    """A star-shaped polygon (often non-convex), or a square with a vertex on a side."""
+    if rng.random() < 0.25:
+        s = rng.uniform(0.3, 1.0)
+        return np.array([(cx, cy), (cx + s / 2, cy), (cx + s, cy), (cx + s, cy + s),
+                         (cx, cy + s)])
+    n = int(rng.integers(3, 9))
+    ang = rng.uniform(0, 2 * np.pi) + 2 * np.pi * np.arange(n) / n
+    r = rng.uniform(0.3, 1.0, n)
+    return np.stack([cx + r * np.cos(ang), cy + r * np.sin(ang)], axis=1)
+
+
+def _model(polys):
+    x = np.concatenate(polys)
+    offsets = np.concatenate([[0], np.cumsum([len(p) for p in polys])]).astype(np.int64)
+    topo = VertexTopology.from_offsets(offsets)
+    ints = dda.geometry.polygon_integrals(x, offsets, topo.nxt)
+    perimeter = np.add.reduceat(np.hypot(*(x[topo.nxt] - x).T), offsets[:-1])
+    thickness = 2.0 * ints.area / perimeter
+    return x, SimpleNamespace(n_blocks=len(polys), topo=topo, offsets=offsets,
+                              thickness=thickness, min_thickness=float(np.min(thickness)),
+                              block_label=lambda j: f"block {j}")
+
+
+def _contacts(rng, x, topo, pairs, depth_scale):
+    """Random vertex-edge contacts between the blocks of ``pairs``, either way round."""
+    rows = []
+    for a, b in pairs:
+        for _ in range(int(rng.integers(0, 6))):
+            j, k = (a, b) if rng.random() < 0.5 else (b, a)
+            v = int(rng.integers(topo.offsets[j], topo.offsets[j + 1]))
+            e = int(rng.integers(topo.offsets[k], topo.offsets[k + 1]))
+            rows.append((v, e, j, k))
+    m = len(rows)
+    r = np.array(rows, dtype=np.int64).reshape(m, 4)
+    state = rng.integers(0, 3, m).astype(np.int8)
+    p_n = 10.0 ** rng.uniform(6, 10, m)
+    t_n = np.where(state != 0, -p_n * rng.uniform(0, depth_scale, m), 0.0)
+    if m:
+        t_n[rng.random(m) < 0.1] = -0.0
+    z = np.zeros(m)
+    c = ContactSet(r[:, 0].copy(), r[:, 1].copy(), r[:, 2].copy(), r[:, 3].copy(), state, z,
+                   t_n, z.copy(), {})
+    dashpot = np.where(rng.random(m) < 0.5, 10.0 ** rng.uniform(5, 9, m), 0.0)
+    return c, p_n, dashpot
+
+
+def _same(a: GuardReport, b: GuardReport):
+    assert a.reason == b.reason
+    for name in ("deepest", "spring_deepest", "untracked"):
+        x, y = getattr(a, name), getattr(b, name)
+        assert np.array_equal(np.float64(x), np.float64(y)), (name, x, y)
+
+
+def _both(model, x, contacts, p_n, pairs, tol, dashpot):
+    penetration.GUARD_KERNEL = True
+    try:
+        got = penetration_guard(model, x, contacts, p_n, pairs, tol, dashpot=dashpot)
+        penetration.GUARD_KERNEL = False
+        want = penetration_guard(model, x, contacts, p_n, pairs, tol, dashpot=dashpot)
+    finally:
+        penetration.GUARD_KERNEL = True
+    return got, want
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_guard_kernel_is_the_composed_guard(seed):
+    rng = np.random.default_rng(seed)
+    nb = int(rng.integers(2, 9))
+    spread = rng.uniform(1.0, 4.0)
+    polys = [_polygon(rng, *rng.uniform(0, spread, 2)) for _ in range(nb)]
+    x, model = _model(polys)
+    pairs = broad_phase(bounding_boxes(x, model.offsets), 0.0)
+    contacts, p_n, dashpot = _contacts(rng, x, model.topo, pairs, rng.uniform(0.0, 0.5))
+    tol = float(10.0 ** rng.uniform(-3, 0))
+    for dp in (None, dashpot):
+        got, want = _both(model, x, contacts, p_n, pairs, tol, dp)
+        _same(got, want)
+
+
+def test_the_random_cases_reach_every_branch():
+    """Refused and passed steps, edges and corners as the worst, released dashpot contacts
+    that change the verdict: the random set above is not all one case."""
+    seen = set()
+    for seed in range(40):
+        rng = np.random.default_rng(seed)
+        nb = int(rng.integers(2, 9))
+        spread = rng.uniform(1.0, 4.0)
+        polys = [_polygon(rng, *rng.uniform(0, spread, 2)) for _ in range(nb)]
+        x, model = _model(polys)
+        pairs = broad_phase(bounding_boxes(x, model.offsets), 0.0)
+        contacts, p_n, dashpot = _contacts(rng, x, model.topo, pairs, rng.uniform(0.0, 0.5))
+        tol = float(10.0 ** rng.uniform(-3, 0))
+        plain = penetration_guard(model, x, contacts, p_n, pairs, tol)
+        damped = penetration_guard(model, x, contacts, p_n, pairs, tol, dashpot=dashpot)
+        seen.add("refused" if plain.reason else "passed")
+        if plain.reason:
+            seen.add("edge" if "the edge from" in plain.reason else "corner")
+        if damped.untracked != plain.untracked:
+            seen.add("released")
+    assert seen == {"refused", "passed", "edge", "corner", "released"}
+
+
+@pytest.mark.parametrize("solver", ["legacy", "newton"])
+def test_runs_give_the_same_bits_with_either_guard(solver):
+    """An impact with a dashpot that lets contacts go while their vertices are inside: the
+    guard's kernel and its composed version take the same steps to the same numbers."""
+    from dataclasses import replace
+
+    def run():
+        scene = S.stopper_impact()[0]
+        j = scene.default_joint
+        scene.set_joint(replace(j, normal_penalty=j.normal_penalty / 1e4,
+                                shear_penalty=j.shear_penalty / 1e4, restitution=0.0))
+        sim = dda.Simulation(scene, dt=1e-3, solver=make_solver(solver))
+        r = sim.run(0.12, progress=False)
+        return sim.committed, r.stats
+
+    try:
+        penetration.GUARD_KERNEL = False
+        c0, s0 = run()
+    finally:
+        penetration.GUARD_KERNEL = True
+    c1, s1 = run()
+    assert np.array_equal(c0.x, c1.x) and np.array_equal(c0.velocity, c1.velocity)
+    for col in ("penetration", "spring_penetration"):
+        assert np.array_equal(np.asarray(s0[col]), np.asarray(s1[col]))
+    assert np.max(np.asarray(s1["penetration"])) > 0.0
+
+
+def _narrow_both(x, topo, d0, limit, pairs, sunk):
+    detection.NARROW_KERNEL = False
+    try:
+        want = narrow_phase(x, topo, d0, limit, pairs, sunk)
+    finally:
+        detection.NARROW_KERNEL = True
+    return narrow_phase(x, topo, d0, limit, pairs, sunk), want
+
+
+def _same_candidates(got, want):
+    assert got.pairs == want.pairs
+    for name in ("vertex", "edge", "bj", "bk"):
+        a, b = getattr(got, name), getattr(want, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert (got.geometry is None) == (want.geometry is None)
+    if got.geometry is not None:
+        for name in ("p1", "p2", "p3", "length", "tau", "normal", "gap", "xi"):
+            assert np.array_equal(getattr(got.geometry, name), getattr(want.geometry, name)), name
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_narrow_phase_kernel_is_the_composed_narrow_phase(seed):
+    rng = np.random.default_rng(seed)
+    nb = int(rng.integers(2, 9))
+    spread = rng.uniform(1.0, 4.0)
+    polys = [_polygon(rng, *rng.uniform(0, spread, 2)) for _ in range(nb)]
+    x, model = _model(polys)
+    d0 = float(10.0 ** rng.uniform(-4, -0.5))
+    limit = float(10.0 ** rng.uniform(-3, 0))
+    pairs = broad_phase(bounding_boxes(x, model.offsets), max(d0, limit))
+    sunk = rng.choice([np.inf, 0.0, float(rng.uniform(0, 0.2))])
+    sunk = rng.uniform(0.0, 0.2, nb) if rng.random() < 0.3 else sunk
+    for p in (pairs, None):
+        _same_candidates(*_narrow_both(x, model.topo, d0, limit, p, sunk))
+
+
+@pytest.mark.parametrize("sink", [0.0, 1e-4, 3e-3])
+def test_narrow_phase_kernel_on_corners_that_meet(sink):
+    """A 3 x 3 stack of unit squares, every other row sunk ``sink`` into the one below: the
+    vertex-vertex cases whose mirrored pairs the narrow phase drops."""
+    rng = np.random.default_rng(7)
+    polys = []
+    for row in range(3):
+        for col in range(3):
+            x0, y0 = col + rng.normal(0, 1e-9), row - sink * (row % 2)
+            polys.append(np.array([(x0, y0), (x0 + 1, y0), (x0 + 1, y0 + 1), (x0, y0 + 1)]))
+    x, model = _model(polys)
+    pairs = broad_phase(bounding_boxes(x, model.offsets), 1e-2)
+    got, want = _narrow_both(x, model.topo, 1e-3, 1e-2, pairs, 1e-3)
+    _same_candidates(got, want)
+    assert len(got) > 0
