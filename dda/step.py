@@ -258,8 +258,9 @@ def _detect(model, state, d0, tolerance) -> _Detected:
             # block of its pair) is held by the edge nearest to it, and two such corners get
             # a spring each
             sunk = 0.25 * tolerance * model.thickness
-            pairs = _pairs(model, state.x, max(d0, pen_limit))
-            cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk)
+            boxes = bounding_boxes(state.x, model.offsets)
+            pairs = _pairs(model, boxes, max(d0, pen_limit))
+            cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk, boxes)
             closed = state.contacts.state != OPEN
             cand = keep_closed(cand, state.contacts.vertex[closed], state.contacts.edge[closed],
                                state.x, topo, d0, pen_limit, model.n_blocks, sunk)
@@ -273,12 +274,12 @@ def _detect(model, state, d0, tolerance) -> _Detected:
     return _Detected(contacts, fresh, geom, pairs, cand.pairs)
 
 
-def _pairs(model, x, margin) -> np.ndarray:
-    """Block pairs whose boxes, grown by ``margin``, overlap, less those of two blocks whose
-    motion is known (fixed, shaken, moved): a contact between them acts on no unknown, and
-    its spring (two fixed blocks built touching or overlapping) would only hold fictitious
-    energy."""
-    pairs = broad_phase(bounding_boxes(x, model.offsets), margin)
+def _pairs(model, boxes, margin) -> np.ndarray:
+    """Block pairs whose ``boxes``, grown by ``margin``, overlap, less those of two blocks
+    whose motion is known (fixed, shaken, moved): a contact between them acts on no unknown,
+    and its spring (two fixed blocks built touching or overlapping) would only hold
+    fictitious energy."""
+    pairs = broad_phase(boxes, margin)
     return pairs[model.free[pairs[:, 0]] | model.free[pairs[:, 1]]]
 
 

@@ -527,6 +527,7 @@ def narrow_phase(
     penetration_limit: float,
     pairs: np.ndarray | None = None,
     sunk_depth: float | np.ndarray = np.inf,
+    boxes: np.ndarray | None = None,
 ) -> CandidateContacts:
     """Vertex-edge contact candidates of the current configuration (rules in the module doc).
 
@@ -547,8 +548,10 @@ def narrow_phase(
         tolerance. Infinite (the default) turns both off. A (n_blocks,) array gives each
         block its own; a pair takes the smaller of its two blocks' (a sliver elsewhere in the
         scene must not make the large blocks' resting depth "sunk").
+    boxes : the blocks' bounding boxes at ``x`` (:func:`bounding_boxes`), when at hand
     """
-    boxes = bounding_boxes(x, topo.offsets)
+    if boxes is None:
+        boxes = bounding_boxes(x, topo.offsets)
     margin = max(search_distance, penetration_limit)
     if pairs is None:
         pairs = broad_phase(boxes, margin)

@@ -24,6 +24,7 @@ from dda.contact.kinematics import (
     tributary_length,
 )
 from dda.contact.tangent import SPRING_TERMS, consistent_tangent
+from dda.kernels.dashpot import add_dashpot
 from dda.kernels.open_close import (
     as_float64,
     kernel_history,
@@ -167,7 +168,11 @@ class LawGroups:
 
 @dataclass
 class ContactResponse:
-    """Forces, states and the linearization of every contact at one trial state."""
+    """Forces, states and the linearization of every contact at one trial state.
+
+    ``stiffness`` (the consistent tangent, a :class:`PairStiffness`: (m, 12, 12) on request by
+    ``np.asarray``) is built when first asked for: a Newton iterate that has converged never
+    needs it. ``tangent`` is what builds it (or the stiffness itself)."""
 
     closed: np.ndarray
     slipping: np.ndarray
@@ -175,7 +180,11 @@ class ContactResponse:
     t_s: np.ndarray
     history: dict[str, np.ndarray]
     residual: np.ndarray
-    stiffness: PairStiffness  # (m, 12, 12) on request (np.asarray)
+    tangent: object  # a callable () -> PairStiffness, or the PairStiffness
+
+    @cached_property
+    def stiffness(self) -> PairStiffness:
+        return self.tangent() if callable(self.tangent) else self.tangent
 
 
 class ContactElement:
@@ -379,10 +388,27 @@ class ContactElement:
         and ``-(c / dt)(g_n0 - g_ref) E^T`` to the force, the dashpot's
         ``(c / dt)(g_n0 + E d - g_ref)`` on the linearized gap (``g_ref``:
         :attr:`dashpot_reference`; the force term only on a contact that starts open)."""
-        if self.dashpot is not None:
-            cd = np.where(state != OPEN, self.dashpot, 0.0)
-            weights[:, 0] += cd
-            force -= (cd * (self.gap0 - self.dashpot_reference))[:, None] * self.e_row
+        if self.dashpot is None:
+            return
+        if KERNEL_LAWS:
+            add_dashpot(weights, force, np.asarray(state, dtype=np.int8), self._dashpot_f64,
+                        self._gap0_f64, self.dashpot_reference, self._e_row_f64)
+            return
+        cd = np.where(state != OPEN, self.dashpot, 0.0)
+        weights[:, 0] += cd
+        force -= (cd * (self.gap0 - self.dashpot_reference))[:, None] * self.e_row
+
+    @cached_property
+    def _dashpot_f64(self) -> np.ndarray:
+        return as_float64(self.dashpot)
+
+    @cached_property
+    def _gap0_f64(self) -> np.ndarray:
+        return as_float64(self.gap0)
+
+    @cached_property
+    def _e_row_f64(self) -> np.ndarray:
+        return as_float64(self.e_row)
 
     @cached_property
     def _spring_rows(self) -> np.ndarray:
@@ -441,8 +467,13 @@ class ContactElement:
                 self.contacts.history, dgs, t_n, ps, self.length, where=closed,
                 normal_penalty=kn)
         residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
-        stiffness = consistent_tangent(kin, self.maps, self.contacts.xi0,
-                                       np.where(closed, kn, 0.0), kss, ksn, t_n, t_s, closed)
+        xi0 = self.contacts.xi0
+
+        def tangent():
+            with section("contact_element"):
+                return consistent_tangent(kin, self.maps, xi0, np.where(closed, kn, 0.0), kss,
+                                          ksn, t_n, t_s, closed)
+
         return ContactResponse(closed, slipping & closed,
                                self.spring_force(closed, kin.gap, t_n), t_s, history,
-                               residual, stiffness)
+                               residual, tangent)
