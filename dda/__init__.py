@@ -4,11 +4,15 @@
 >>> scene = dda.Scene(gravity=9.81)
 """
 
-from dda import io
-from dda.io.scene_file import load_scene
-from dda.result import Result
-from dda.scene import Block, Scene
-from dda.simulation import PenaltyWarning, Simulation, SimulationError
+from dda.kernels.cache import drop_stale_kernel_caches
+
+drop_stale_kernel_caches()  # before any kernel loads its compiled code (dda/kernels/cache.py)
+
+from dda import io  # noqa: E402
+from dda.io.scene_file import load_scene  # noqa: E402
+from dda.result import Result  # noqa: E402
+from dda.scene import Block, Scene  # noqa: E402
+from dda.simulation import PenaltyWarning, Simulation, SimulationError  # noqa: E402
 
 __all__ = ["Block", "PenaltyWarning", "Result", "Scene", "Simulation", "SimulationError", "io",
            "load_scene"]

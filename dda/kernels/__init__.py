@@ -27,7 +27,10 @@ the numbers of the numpy code they replaced, to the bit (the tests compare them)
 contacts of a small scene numpy's per-call overhead, not the arithmetic, was the cost.
 
 The kernels compile on their first call (``cache=True``: once per machine, then loaded from
-``__pycache__``).
+``__pycache__``). numba checks a cached kernel against its own file only, not against the
+files of the helpers it calls; ``import dda`` therefore drops every cached kernel of the
+package once any file with a compiled function is newer than the cache
+(:mod:`dda.kernels.cache`).
 """
 
 from dda.kernels.pair_stiffness import PairStiffness
