@@ -1,6 +1,7 @@
 """The contact side of a step compiled, against the versions composed of numpy and smaller
-kernels: the penetration guard as one pass (``penetration._guard_kernel``, ``GUARD_KERNEL``)
-and the narrow phase as one pass (``detection._narrow_phase_kernel``, ``NARROW_KERNEL``). The
+kernels: the penetration guard as one pass (``penetration._guard_kernel``, ``GUARD_KERNEL``),
+the narrow phase as one pass (``detection._narrow_phase_kernel``, ``NARROW_KERNEL``) and a
+Newton iterate's out-of-balance vectors (``newton_residuals``, ``RESIDUAL_KERNEL``). The
 same reports and candidates, to the bit, on random overlapping blocks with random contacts
 (released dashpot contacts included), on stacks whose corners meet, and on whole runs."""
 
@@ -201,3 +202,30 @@ def test_narrow_phase_kernel_on_corners_that_meet(sink):
     got, want = _narrow_both(x, model.topo, 1e-3, 1e-2, pairs, 1e-3)
     _same_candidates(got, want)
     assert len(got) > 0
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_newton_residuals_kernel_is_the_numpy_one(seed):
+    """An iterate's out-of-balance vectors (``dda.solvers.newton._residuals``) from the kernel
+    and from numpy, on random blocks (some fixed, some rigid) and contacts."""
+    from dda.solvers import newton
+
+    rng = np.random.default_rng(seed)
+    nb, m = int(rng.integers(1, 30)), int(rng.integers(0, 60))
+    free = rng.random(nb) < 0.8
+    rigid = (rng.random(nb) < 0.3) if seed % 2 else None
+    scale = 10.0 ** rng.uniform(-6, 9, (nb, 6, 6))
+    problem = SimpleNamespace(
+        block_k=rng.standard_normal((nb, 6, 6)) * scale, block_f=rng.standard_normal((nb, 6)),
+        free=free, rigid=rigid,
+        element=SimpleNamespace(bj=rng.integers(0, nb, m), bk=rng.integers(0, nb, m)))
+    d = rng.standard_normal((nb, 6)) * 10.0 ** rng.uniform(-9, -2, (nb, 6))
+    pair_r = rng.standard_normal((m, 12)) * 10.0 ** rng.uniform(0, 8, (m, 12))
+    try:
+        newton.RESIDUAL_KERNEL = False
+        want = newton._residuals(problem, d, pair_r)
+    finally:
+        newton.RESIDUAL_KERNEL = True
+    got = newton._residuals(problem, d, pair_r)
+    for a, b in zip(got, want, strict=True):
+        assert a.shape == b.shape and np.array_equal(a, b)

@@ -27,9 +27,9 @@ from dda.contact.tangent import SPRING_TERMS, consistent_tangent
 from dda.kernels.dashpot import add_dashpot
 from dda.kernels.open_close import (
     as_float64,
+    contact_response,
     kernel_history,
     kernel_history_dict,
-    law_response,
 )
 from dda.kernels.pair_stiffness import PairStiffness, legacy_springs
 from dda.profiling import section
@@ -449,31 +449,33 @@ class ContactElement:
         p3 = g.p3 + np.einsum("mij,mj->mi", a3, dd)
         kin = trial_kinematics(p1, p2, p3, self.contacts.xi0, self.maps, second=False)
         ps, kn = self.shear_penalty, self.judge_stiffness
-        # the normal force (with an impact dashpot, the spring's and the dashpot's) on the
-        # exact gap
-        judged = self.judged_gap(kin.gap)
-        closed = judged < 0.0
-        t_n = np.where(closed, kn * judged, 0.0)
-        dgs = kin.shear - self.shear0
+        xi0 = self.contacts.xi0
         if self.kernel_laws is not None:
             with section("return_map"):
-                t_s, slipping, g_se, slip, sliding, kss, ksn = law_response(
+                (closed, slipping, spring, t_s, g_se, slip, sliding, kss, ksn, t_n,
+                 residual) = contact_response(
                     *self.kernel_laws, *kernel_history(self.contacts.history, len(self)),
-                    as_float64(dgs), as_float64(t_n), as_float64(ps), as_float64(kn),
-                    as_float64(self.length), closed)
+                    kin.gap, kin.shear, as_float64(self.shear0), as_float64(self.release),
+                    self.dashpot is not None, as_float64(kn), as_float64(self.normal_penalty),
+                    as_float64(ps), as_float64(self.length), kin.e_row, kin.i_row)
             history = kernel_history_dict(self.contacts.history, g_se, slip, sliding)
         else:
+            # the normal force (with an impact dashpot, the spring's and the dashpot's) on the
+            # exact gap
+            judged = self.judged_gap(kin.gap)
+            closed = judged < 0.0
+            t_n = np.where(closed, kn * judged, 0.0)
+            dgs = kin.shear - self.shear0
             t_s, slipping, history, (kss, ksn) = self.laws.return_map(  # with the tangent
                 self.contacts.history, dgs, t_n, ps, self.length, where=closed,
                 normal_penalty=kn)
-        residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
-        xi0 = self.contacts.xi0
+            slipping = slipping & closed
+            residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
+            spring = self.spring_force(closed, kin.gap, t_n)
 
         def tangent():
             with section("contact_element"):
                 return consistent_tangent(kin, self.maps, xi0, np.where(closed, kn, 0.0), kss,
                                           ksn, t_n, t_s, closed)
 
-        return ContactResponse(closed, slipping & closed,
-                               self.spring_force(closed, kin.gap, t_n), t_s, history,
-                               residual, tangent)
+        return ContactResponse(closed, slipping, spring, t_s, history, residual, tangent)

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["matrix_data", "upper_data", "rhs_data", "add_pair_vectors"]
+__all__ = ["matrix_data", "upper_data", "rhs_data", "add_pair_vectors", "newton_residuals"]
 
 
 @njit(cache=True)
@@ -199,3 +199,54 @@ def add_pair_vectors(out, bj, bk, pair_f):
         for i in range(6):
             out[bk[c], i] += pair_f[c, 6 + i]
     return out
+
+
+@njit(cache=True)
+def newton_residuals(block_k, d, block_f, free, rigid, bj, bk, pair_r):
+    """The out-of-balance vectors of a Newton iterate, as the numpy expressions give them:
+
+        inertia = K_b d_b (``numpy.einsum('bij,bj->bi')``'s order: the even and the odd terms
+        apart, then the two),  block_r = inertia - f_b,
+        r = block_r + sum over contacts of r_c,  contact = sum over contacts of |r_c|
+
+    (contacts added as :func:`add_pair_vectors` does), rows of blocks without unknowns and
+    the strain entries of ``rigid`` blocks zero in ``r`` and ``contact``. Returns ``block_r``
+    and the free blocks' rows of ``r``, ``inertia`` and ``contact``, each (n_free, 6)."""
+    nb = d.shape[0]
+    inertia = np.empty((nb, 6))
+    block_r = np.empty((nb, 6))
+    for b in range(nb):
+        for i in range(6):
+            k = block_k[b, i]
+            even = k[0] * d[b, 0] + k[2] * d[b, 2] + k[4] * d[b, 4]
+            odd = k[1] * d[b, 1] + k[3] * d[b, 3] + k[5] * d[b, 5]
+            inertia[b, i] = even + odd
+            block_r[b, i] = inertia[b, i] - block_f[b, i]
+    r = block_r.copy()
+    contact = np.zeros((nb, 6))
+    for c in range(bj.shape[0]):
+        for i in range(6):
+            r[bj[c], i] += pair_r[c, i]
+            contact[bj[c], i] += abs(pair_r[c, i])
+    for c in range(bk.shape[0]):
+        for i in range(6):
+            r[bk[c], i] += pair_r[c, 6 + i]
+            contact[bk[c], i] += abs(pair_r[c, 6 + i])
+    n_free = 0
+    for b in range(nb):
+        if free[b]:
+            n_free += 1
+    r_free = np.empty((n_free, 6))
+    inertia_free = np.empty((n_free, 6))
+    contact_free = np.empty((n_free, 6))
+    row = 0
+    for b in range(nb):
+        if not free[b]:
+            continue
+        for i in range(6):
+            strain_off = rigid[b] and i >= 3
+            r_free[row, i] = 0.0 if strain_off else r[b, i]
+            contact_free[row, i] = 0.0 if strain_off else contact[b, i]
+            inertia_free[row, i] = inertia[b, i]
+        row += 1
+    return block_r, r_free, inertia_free, contact_free

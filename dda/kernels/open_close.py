@@ -208,6 +208,44 @@ def law_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n
 
 
 @njit(cache=True)
+def contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, gap, shear, shear0,
+                     release, has_dashpot, kn, pn, ps, length, e_row, i_row):
+    """The fully implicit method's contact response around the return map
+    (:meth:`dda.contact.ContactElement.response`), element by element as its numpy
+    expressions: the judged gap ``g_n - release`` (``g_n`` without a dashpot), closed where
+    negative, its normal force ``k_n`` times it, the shear increment ``g_s - g_s0``,
+    :func:`law_response` on the closed contacts, the residual rows ``t_n E + t_s I`` and the
+    spring's own force ``min(p_n g_n, 0)`` (the normal force itself without a dashpot).
+
+    Returns ``(closed, slipping and closed, spring force, t_s, g_se, slip, sliding,
+    dt_s/dg_s, dt_s/dg_n, t_n, residual)``."""
+    m = gap.shape[0]
+    closed = np.empty(m, dtype=np.bool_)
+    t_n = np.empty(m)
+    dgs = np.empty(m)
+    for i in range(m):
+        judged = gap[i] - release[i] if has_dashpot else gap[i]
+        closed[i] = judged < 0.0
+        t_n[i] = kn[i] * judged if closed[i] else 0.0
+        dgs[i] = shear[i] - shear0[i]
+    t_s, slipping, g_out, slip_out, sliding_out, kss, ksn = law_response(
+        kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n, ps, kn, length, closed)
+    residual = np.empty((m, e_row.shape[1]))
+    spring = np.empty(m)
+    slipping_closed = np.empty(m, dtype=np.bool_)
+    for i in range(m):
+        for j in range(e_row.shape[1]):
+            residual[i, j] = t_n[i] * e_row[i, j] + t_s[i] * i_row[i, j]
+        if has_dashpot:
+            spring[i] = _np_min(pn[i] * gap[i], 0.0) if closed[i] else 0.0
+        else:
+            spring[i] = t_n[i]
+        slipping_closed[i] = slipping[i] and closed[i]
+    return (closed, slipping_closed, spring, t_s, g_out, slip_out, sliding_out, kss, ksn, t_n,
+            residual)
+
+
+@njit(cache=True)
 def step_start(state, kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, t_n, ps,
                length):
     """The pull-back at a step's start: the return map, with no increment, of every contact

@@ -32,6 +32,8 @@ import numpy as np
 
 from dda._checks import finite_number
 from dda.contact.contacts import OPEN, SLIP, STICK
+from dda.kernels.assembly import newton_residuals
+from dda.profiling import section
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.linear import SingularSystemError, assemble_and_solve, assemble_vector
 from dda.solvers.open_close import open_close
@@ -131,16 +133,12 @@ class NewtonRaphson(NonlinearSolver):
         factored = None  # the contact states of the tangent factorized last in this call
         base, step, halvings = None, None, 0  # the last Newton step, from base
         patterns: list[np.ndarray] = []  # the contacts' pattern at each accepted iterate
+        force_norm = _norm(problem.block_f[free])
         for it in range(max_iter + 1):
             resp = el.response(d)
-            inertia = np.einsum("bij,bj->bi", problem.block_k, d)
-            block_r = inertia - problem.block_f
-            r = assemble_vector(block_r, free, el.bj, el.bk, resp.residual, problem.rigid)
-            contact = assemble_vector(np.zeros_like(block_r), free, el.bj, el.bk,
-                                      np.abs(resp.residual), problem.rigid)
-            norm = _norm(r[free])
-            scale = max(_norm(problem.block_f[free]), _norm(inertia[free]),
-                        _norm(contact[free]), 1e-300)
+            block_r, r_free, inertia_free, contact_free = _residuals(problem, d, resp.residual)
+            norm = _norm(r_free)
+            scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
             if norm <= self.tol * scale or _at_round_off(norms + [norm], scale):
                 norms.append(norm)
                 break
@@ -187,6 +185,32 @@ class NewtonRaphson(NonlinearSolver):
         state = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN).astype(np.int8)
         trial = el.trial_contacts(state, resp.t_n, resp.t_s, resp.history)
         return StepSolution(d, trial, True, 0, it, "", norms)
+
+
+RESIDUAL_KERNEL = True
+"""Whether an iterate's out-of-balance vectors come from one compiled pass
+(:func:`dda.kernels.assembly.newton_residuals`); False: numpy (the same bits)."""
+
+
+def _residuals(problem, d, pair_r):
+    """``(block_r, r, inertia, contact)`` of the iterate ``d``: the blocks' own out-of-balance
+    ``K_b d - f_b`` (every block), and of the free blocks only the total out-of-balance
+    ``r``, the blocks' ``K_b d`` and the contacts' summed ``|r_c|`` (the last two measure the
+    forces |r| is judged against)."""
+    el, free = problem.element, problem.free
+    if RESIDUAL_KERNEL:
+        with section("assembly"):
+            rigid = problem.rigid if problem.rigid is not None else np.zeros(len(free), bool)
+            return newton_residuals(problem.block_k, d, problem.block_f, free, rigid,
+                                    np.asarray(el.bj, dtype=np.int64),
+                                    np.asarray(el.bk, dtype=np.int64),
+                                    np.ascontiguousarray(pair_r, dtype=np.float64))
+    inertia = np.einsum("bij,bj->bi", problem.block_k, d)
+    block_r = inertia - problem.block_f
+    r = assemble_vector(block_r, free, el.bj, el.bk, pair_r, problem.rigid)
+    contact = assemble_vector(np.zeros_like(block_r), free, el.bj, el.bk, np.abs(pair_r),
+                              problem.rigid)
+    return block_r, r[free], inertia[free], contact[free]
 
 
 def _norm(a: np.ndarray) -> float:
