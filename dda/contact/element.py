@@ -25,6 +25,7 @@ from dda.contact.kinematics import (
 )
 from dda.contact.tangent import SPRING_TERMS, consistent_tangent
 from dda.kernels.dashpot import add_dashpot
+from dda.kernels.kinematics import pair_increments as _pair_increments
 from dda.kernels.open_close import (
     as_float64,
     contact_response,
@@ -346,7 +347,16 @@ class ContactElement:
 
     def pair_increments(self, d: np.ndarray) -> np.ndarray:
         """(m, 12) increments [d_j; d_k] of each contact's two blocks from (n_blocks, 6) d."""
-        return np.concatenate([d[self.bj], d[self.bk]], axis=1)
+        return _pair_increments(np.ascontiguousarray(d, dtype=np.float64), self._bj64,
+                                self._bk64)
+
+    @cached_property
+    def _bj64(self) -> np.ndarray:
+        return np.ascontiguousarray(self.bj, dtype=np.int64)
+
+    @cached_property
+    def _bk64(self) -> np.ndarray:
+        return np.ascontiguousarray(self.bk, dtype=np.int64)
 
     def linear_gaps(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Normal gap and shear increment linearized at the step's start: g_n0 + E d, I d."""

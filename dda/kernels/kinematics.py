@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["first_variations", "frames", "pair_maps", "tributary_lengths"]
+__all__ = ["first_variations", "frames", "pair_increments", "pair_maps", "tributary_lengths"]
 
 
 @njit(cache=True)
@@ -151,4 +151,16 @@ def tributary_lengths(x, vertex, prv, nxt, p1, tau, length):
             if k == 0 or not (best_cos >= cos):
                 best_cos, best_len = cos, la
         out[c] = 0.5 * min(length[c], best_len)
+    return out
+
+
+@njit(cache=True)
+def pair_increments(d, bj, bk):
+    """(m, 12) ``[d[bj[c]], d[bk[c]]]`` of every contact c (a copy of the rows)."""
+    m = bj.shape[0]
+    out = np.empty((m, 12))
+    for c in range(m):
+        for i in range(6):
+            out[c, i] = d[bj[c], i]
+            out[c, 6 + i] = d[bk[c], i]
     return out

@@ -128,7 +128,6 @@ class NewtonRaphson(NonlinearSolver):
         free = problem.free
         d = d.copy()
         norms: list[float] = []
-        zero_known = np.zeros_like(problem.d_known)
         factor = problem.factor(False)
         factored = None  # the contact states of the tangent factorized last in this call
         base, step, halvings = None, None, 0  # the last Newton step, from base
@@ -158,7 +157,7 @@ class NewtonRaphson(NonlinearSolver):
                 continue
             norms.append(norm)
             patterns.append(pattern)
-            if not np.isfinite(norm):
+            if not math.isfinite(norm):
                 return StepSolution(None, None, False, 0, it,
                                     "Newton-Raphson diverged (non-finite residual)", norms)
             if it == max_iter:
@@ -174,7 +173,8 @@ class NewtonRaphson(NonlinearSolver):
             done = factor.factorizations if factor is not None else 0
             try:
                 step = assemble_and_solve(problem.block_k, -block_r, free, el.bj, el.bk,
-                                          resp.stiffness, -resp.residual, zero_known,
+                                          resp.stiffness, -resp.residual,
+                                          np.zeros_like(problem.d_known),
                                           problem.pattern, factor=factor, near=near)
             except SingularSystemError as exc:
                 return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
