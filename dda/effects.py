@@ -156,7 +156,7 @@ class AccelerationHistory:
     def _called(self, t) -> np.ndarray:
         """(len(t), 2) the callable's accelerations at the times ``t``, checked as a whole and
         one by one (for the message) only when that fails."""
-        values = [self._callable(ti) for ti in t]
+        values = [self._callable(ti) for ti in t.tolist()]  # Python floats: faster to call
         try:
             a = np.array(values, dtype=float)
         except (TypeError, ValueError):

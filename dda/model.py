@@ -17,6 +17,7 @@ from dda.contact.contacts import ContactSet, pair_key
 from dda.contact.dashpot import damping_ratio
 from dda.contact.detection import Memo, VertexTopology
 from dda.contact.friction import FrictionLaw
+from dda.kernels.joints import deepest_spring, joint_rows
 from dda.scene import Scene
 
 __all__ = ["JointTable", "Model"]
@@ -228,7 +229,20 @@ class Model:
         """Row of :attr:`joints` of the joint between blocks bj and bk (-1 where none)."""
         if not len(self.joints.pair_keys):  # one joint for every pair
             return np.full(len(bj), self.joints.default, dtype=np.int64)
-        return self.joints.index(pair_key(bj, bk, self.n_blocks))
+        j = self.joints
+        return joint_rows(np.asarray(bj, dtype=np.int64), np.asarray(bk, dtype=np.int64),
+                          self.n_blocks, j.pair_keys, j.pair_joint, j.default)
+
+    def deepest_spring(self, contacts: ContactSet) -> float:
+        """The deepest spring penetration ``-t_n / p_n`` of the closed contacts of
+        ``contacts`` (m), 0 when none sinks (:meth:`spring_depths`' largest, compiled)."""
+        j = self.joints
+        c = contacts
+        return float(deepest_spring(np.asarray(c.state, dtype=np.int8),
+                                    np.ascontiguousarray(c.t_n, dtype=np.float64),
+                                    np.asarray(c.bj, dtype=np.int64),
+                                    np.asarray(c.bk, dtype=np.int64), self.n_blocks,
+                                    j.pair_keys, j.pair_joint, j.default, j.normal_penalty))
 
     def spring_depths(self, contacts: ContactSet):
         """The closed contacts of ``contacts`` (indices), how deep their springs sink

@@ -27,7 +27,7 @@ from dda.io.checkpoint import (
 )
 from dda.model import Model
 from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning
-from dda.profiling import StepProfile
+from dda.profiling import SECTIONS, StepProfile
 from dda.progress import ProgressBar
 from dda.recorder import Recorder, frame
 from dda.result import Frame, Result
@@ -39,6 +39,9 @@ from dda.step import StepSettings, StepState, step
 from dda.step_control import StepControl
 
 __all__ = ["Simulation", "SimulationError", "PenaltyWarning", "CHECKPOINT_VERSION"]
+
+#: the stats columns of the step profile's sections, in its order
+_SECTION_FIELDS = tuple(f"{name}_time" for name in SECTIONS)
 
 
 class Simulation:
@@ -332,7 +335,7 @@ class Simulation:
             unknowns=report.unknowns, pairs=report.pairs, penetration=report.penetration,
             spring_penetration=report.spring_penetration,
             residual_norms=report.residual_norms,
-            **{f"{name}_time": sec for name, sec in profile.seconds.items()},
+            **dict(zip(_SECTION_FIELDS, profile.seconds.values(), strict=True)),
         )
         return report
 

@@ -239,7 +239,7 @@ def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0
 
 def deepest_spring(model, contacts) -> float:
     """Deepest penetration of the committed closed springs (m)."""
-    return float(np.maximum.reduce(model.spring_depths(contacts)[1], initial=0.0))
+    return model.deepest_spring(contacts)
 
 
 def _detect(model, state, d0, tolerance) -> _Detected:

@@ -229,3 +229,32 @@ def test_newton_residuals_kernel_is_the_numpy_one(seed):
     got = newton._residuals(problem, d, pair_r)
     for a, b in zip(got, want, strict=True):
         assert a.shape == b.shape and np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_joint_lookups_are_the_numpy_ones(seed):
+    """The compiled joint rows and deepest spring (dda.kernels.joints) against the joint
+    table's searchsorted and numpy's reduction of the spring depths."""
+    from dda.contact.contacts import pair_key
+    from dda.kernels.joints import deepest_spring, joint_rows
+    from dda.model import JointTable
+
+    rng = np.random.default_rng(seed)
+    nb, m, n_joints = int(rng.integers(2, 40)), int(rng.integers(0, 80)), 4
+    pairs = {tuple(sorted(rng.choice(nb, 2, replace=False))) for _ in range(rng.integers(0, 30))}
+    keys = np.sort(np.array([pair_key(a, b, nb) for a, b in pairs], dtype=np.int64))
+    table = JointTable(int(rng.integers(-1, n_joints)), keys,
+                       rng.integers(0, n_joints, len(keys)).astype(np.int64),
+                       10.0 ** rng.uniform(6, 11, n_joints), np.ones(n_joints),
+                       np.zeros(n_joints, dtype=np.int64), (), {})
+    bj, bk = rng.integers(0, nb, m), rng.integers(0, nb, m)
+    rows = joint_rows(bj, bk, nb, table.pair_keys, table.pair_joint, table.default)
+    assert np.array_equal(rows, table.index(pair_key(bj, bk, nb)))
+    state = rng.integers(0, 3, m).astype(np.int8)
+    t_n = np.where(state != 0, -rng.uniform(0, 1e7, m), 0.0)
+    t_n[rng.random(m) < 0.2] *= -1.0  # some closed contacts in tension
+    closed = state != 0
+    want = np.maximum.reduce(-t_n[closed] / table.normal_penalty[rows[closed]], initial=0.0)
+    got = deepest_spring(state, t_n, bj, bk, nb, table.pair_keys, table.pair_joint,
+                         table.default, table.normal_penalty)
+    assert np.array_equal(np.float64(got), np.float64(want))

@@ -441,6 +441,9 @@ def _next_states(el, state, history, gap, dgs, t_slip, held, gap_tol):
     return new_state, t_n
 
 
+_COORDINATE_ROUND_OFF = 64.0 * float(np.finfo(float).eps)
+
+
 def round_off_gap(element) -> np.ndarray:
     """(m,) the size below which a contact's linearized gap is round-off, not a gap.
 
@@ -449,7 +452,7 @@ def round_off_gap(element) -> np.ndarray:
     """
     g = element.geometry
     return round_off_gaps(as_float64(g.p1), as_float64(g.p2), as_float64(g.length),
-                          GAP_ROUND_OFF, 64.0 * np.finfo(float).eps)
+                          GAP_ROUND_OFF, _COORDINATE_ROUND_OFF)
 
 
 def _unhold_cycling(held, state, proposed):
