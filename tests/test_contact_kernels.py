@@ -86,16 +86,25 @@ def _both(model, x, contacts, p_n, pairs, tol, dashpot):
     return got, want
 
 
-@pytest.mark.parametrize("seed", range(40))
-def test_guard_kernel_is_the_composed_guard(seed):
+def _guard_case(seed):
+    """A random guard case: blocks, model, pairs, contacts, penalties, dashpots, tolerance."""
     rng = np.random.default_rng(seed)
-    nb = int(rng.integers(2, 9))
-    spread = rng.uniform(1.0, 4.0)
-    polys = [_polygon(rng, *rng.uniform(0, spread, 2)) for _ in range(nb)]
-    x, model = _model(polys)
+    x, model = _random_blocks(rng)
     pairs = broad_phase(bounding_boxes(x, model.offsets), 0.0)
     contacts, p_n, dashpot = _contacts(rng, x, model.topo, pairs, rng.uniform(0.0, 0.5))
-    tol = float(10.0 ** rng.uniform(-3, 0))
+    return x, model, pairs, contacts, p_n, dashpot, float(10.0 ** rng.uniform(-3, 0))
+
+
+def _random_blocks(rng):
+    """2 to 8 random polygons scattered over a square of 1 to 4 m (overlapping often)."""
+    nb = int(rng.integers(2, 9))
+    spread = rng.uniform(1.0, 4.0)
+    return _model([_polygon(rng, *rng.uniform(0, spread, 2)) for _ in range(nb)])
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_guard_kernel_is_the_composed_guard(seed):
+    x, model, pairs, contacts, p_n, dashpot, tol = _guard_case(seed)
     for dp in (None, dashpot):
         got, want = _both(model, x, contacts, p_n, pairs, tol, dp)
         _same(got, want)
@@ -106,14 +115,7 @@ def test_the_random_cases_reach_every_branch():
     that change the verdict: the random set above is not all one case."""
     seen = set()
     for seed in range(40):
-        rng = np.random.default_rng(seed)
-        nb = int(rng.integers(2, 9))
-        spread = rng.uniform(1.0, 4.0)
-        polys = [_polygon(rng, *rng.uniform(0, spread, 2)) for _ in range(nb)]
-        x, model = _model(polys)
-        pairs = broad_phase(bounding_boxes(x, model.offsets), 0.0)
-        contacts, p_n, dashpot = _contacts(rng, x, model.topo, pairs, rng.uniform(0.0, 0.5))
-        tol = float(10.0 ** rng.uniform(-3, 0))
+        x, model, pairs, contacts, p_n, dashpot, tol = _guard_case(seed)
         plain = penetration_guard(model, x, contacts, p_n, pairs, tol)
         damped = penetration_guard(model, x, contacts, p_n, pairs, tol, dashpot=dashpot)
         seen.add("refused" if plain.reason else "passed")
@@ -174,10 +176,8 @@ def _same_candidates(got, want):
 @pytest.mark.parametrize("seed", range(40))
 def test_narrow_phase_kernel_is_the_composed_narrow_phase(seed):
     rng = np.random.default_rng(seed)
-    nb = int(rng.integers(2, 9))
-    spread = rng.uniform(1.0, 4.0)
-    polys = [_polygon(rng, *rng.uniform(0, spread, 2)) for _ in range(nb)]
-    x, model = _model(polys)
+    x, model = _random_blocks(rng)
+    nb = model.n_blocks
     d0 = float(10.0 ** rng.uniform(-4, -0.5))
     limit = float(10.0 ** rng.uniform(-3, 0))
     pairs = broad_phase(bounding_boxes(x, model.offsets), max(d0, limit))

@@ -20,11 +20,19 @@
   effective system, predicted vertex speed) and end (vertex moves, their checks, the Newmark
   update), for blocks without damping, loads or constraint springs
   (``dda.step.BLOCK_KERNELS`` switches them off);
-- :mod:`dda.kernels.dashpot`: each contact's impact dashpot.
+- :mod:`dda.kernels.dashpot`: each contact's impact dashpot, and its terms in legacy DDA's
+  springs;
+- :mod:`dda.kernels.joints`: each contact's joint row and the deepest committed spring;
+- :func:`dda.kernels.assembly.newton_residuals`: a Newton iterate's out-of-balance vectors.
 
-The kinematics, friction, OPEN-CLOSE, faces, geometry, forces, blocks and dashpot kernels give
-the numbers of the numpy code they replaced, to the bit (the tests compare them): on the few
-contacts of a small scene numpy's per-call overhead, not the arithmetic, was the cost.
+Two passes live beside the numpy code they replace, in :mod:`dda.contact`: the narrow phase
+after the broad phase (``detection._narrow_phase_kernel``) and the penetration guard
+(``penetration._guard_kernel``); ``NARROW_KERNEL`` and ``GUARD_KERNEL`` switch them off.
+
+The kinematics, friction, OPEN-CLOSE, faces, geometry, forces, blocks, dashpot, joints,
+residual, narrow-phase and guard kernels give the numbers of the numpy code they replaced, to
+the bit (the tests compare them): on the few contacts of a small scene numpy's per-call
+overhead, not the arithmetic, was the cost.
 
 The kernels compile on their first call (``cache=True``: once per machine, then loaded from
 ``__pycache__``). numba checks a cached kernel against its own file only, not against the
