@@ -34,16 +34,20 @@ solvers run side by side, one per core.) The penalty sweep behind
 that floor (legacy, 0.3 s, median / most): 55 / 85 mm at 2.2e9 N/m (the rule without the floor;
 57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: it is the penalty, not dt), 38 / 65 mm at 5e9,
 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10: joints softer than the rock make
-the whole mass softer and its face moves further. 10 s of shaking under ``--auto``: 11.2 min of
-CPU (legacy, 42,498 steps, 12 cut) and 16.0 min (Newton, 42,590 steps, 16 cut); 12.6 and 19.6
-min before issue 19's seventh part; all without the impact dashpot, not rerun since.
+the whole mass softer and its face moves further. 10 s of shaking under ``--auto`` (issue 19's
+ninth part, the solvers side by side): 8.6 min of CPU (legacy, 42,669 steps, 40 cut) and 16.5
+min (Newton, 43,095 steps, 104 cut); without the impact dashpot 11.2 and 16.0 min (42,498 and
+42,590 steps; issue 19's seventh part).
 (Before the detection fixes of the
 session after issue 20's, the automatic run stopped at 0.09 s: detection lost faces where
 corners meet on continuous joints; without the floor it then ran 10 s in 4.3 (legacy) and 3.3
 (Newton) minutes, its face 0.91 / 1.59 and 1.76 / 3.20 m out.)
-Through 10 s of shaking (``--duration 10``) the slope fails: legacy DDA took 12.9 minutes of
-CPU (27,009 steps, 828 cuts: 3.1%, 1.9 GB at its peak), and the face blocks ended 0.71 m
-(median) and 1.86 m (most) from where they started (issue 19's fifth part; not rerun since).
+Through 10 s of shaking (``--duration 10``) the face slides out: legacy DDA took 127 s of wall
+time (6,988 steps, 161 cut: 2.3%) and its face blocks ended 398 mm (median) and 416 mm (most)
+from where they started, Newton 323 s (10,111 steps, 380 cut: 3.8%) and 409 / 594 mm (issue
+19's ninth part, the two side by side). Without the impact dashpot legacy DDA took 12.9
+minutes of CPU (27,009 steps, 828 cut, 1.9 GB at its peak) and the face ended 0.71 / 1.86 m
+out (issue 19's fifth part).
 The shaken slope is chaotic at this level: round-off (SuperLU instead of PARDISO) moved the
 face by several millimetres; 28 and 53 mm before the contact-integrity fixes of issue 17.
 An order-of-magnitude check, not a validation: on the 25 degree bedding with phi 35 degrees, a
