@@ -227,8 +227,6 @@ class Model:
 
     def joint_index(self, bj: np.ndarray, bk: np.ndarray) -> np.ndarray:
         """Row of :attr:`joints` of the joint between blocks bj and bk (-1 where none)."""
-        if not len(self.joints.pair_keys):  # one joint for every pair
-            return np.full(len(bj), self.joints.default, dtype=np.int64)
         j = self.joints
         return joint_rows(np.asarray(bj, dtype=np.int64), np.asarray(bk, dtype=np.int64),
                           self.n_blocks, j.pair_keys, j.pair_joint, j.default)

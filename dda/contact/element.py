@@ -347,16 +347,8 @@ class ContactElement:
 
     def pair_increments(self, d: np.ndarray) -> np.ndarray:
         """(m, 12) increments [d_j; d_k] of each contact's two blocks from (n_blocks, 6) d."""
-        return _pair_increments(np.ascontiguousarray(d, dtype=np.float64), self._bj64,
-                                self._bk64)
-
-    @cached_property
-    def _bj64(self) -> np.ndarray:
-        return np.ascontiguousarray(self.bj, dtype=np.int64)
-
-    @cached_property
-    def _bk64(self) -> np.ndarray:
-        return np.ascontiguousarray(self.bk, dtype=np.int64)
+        return _pair_increments(as_float64(d), np.asarray(self.bj, dtype=np.int64),
+                                np.asarray(self.bk, dtype=np.int64))
 
     def linear_gaps(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Normal gap and shear increment linearized at the step's start: g_n0 + E d, I d."""
@@ -401,24 +393,13 @@ class ContactElement:
         if self.dashpot is None:
             return
         if KERNEL_LAWS:
-            add_dashpot(weights, force, np.asarray(state, dtype=np.int8), self._dashpot_f64,
-                        self._gap0_f64, self.dashpot_reference, self._e_row_f64)
+            add_dashpot(weights, force, np.asarray(state, dtype=np.int8),
+                        as_float64(self.dashpot), as_float64(self.gap0),
+                        self.dashpot_reference, as_float64(self.e_row))
             return
         cd = np.where(state != OPEN, self.dashpot, 0.0)
         weights[:, 0] += cd
         force -= (cd * (self.gap0 - self.dashpot_reference))[:, None] * self.e_row
-
-    @cached_property
-    def _dashpot_f64(self) -> np.ndarray:
-        return as_float64(self.dashpot)
-
-    @cached_property
-    def _gap0_f64(self) -> np.ndarray:
-        return as_float64(self.gap0)
-
-    @cached_property
-    def _e_row_f64(self) -> np.ndarray:
-        return as_float64(self.e_row)
 
     @cached_property
     def _spring_rows(self) -> np.ndarray:
