@@ -19,7 +19,9 @@ return_map
 assembly
     building the global matrix and right-hand side (and residual vectors)
 solve
-    factorization and solution of the linear system
+    factorization and solution of the linear system; on a scene solved dense with the
+    built-in friction laws, the whole OPEN-CLOSE iteration (its return maps and assembly too:
+    one kernel call, :mod:`dda.kernels.dense_passes`)
 guard
     the penetration guard: every vertex inside another block at the end of the step, found
     geometrically and checked against the closed contacts (:mod:`dda.contact.penetration`)

@@ -100,6 +100,7 @@ import numpy as np
 
 from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.contact.tangent import SPRING_TERMS
+from dda.kernels.dense_passes import CONVERGED, NOT_SETTLED, SINGULAR, dense_passes
 from dda.kernels.open_close import (
     as_float64,
     kernel_history,
@@ -110,9 +111,9 @@ from dda.kernels.open_close import (
     step_start,
 )
 from dda.kernels.pair_stiffness import PairStiffness
-from dda.profiling import section
+from dda.profiling import count_solve, section
 from dda.solvers.base import StepProblem
-from dda.solvers.linear import SingularSystemError, assemble_and_solve
+from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve
 
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
            "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "SETTLE_BAND", "round_off_gap"]
@@ -134,6 +135,9 @@ SETTLE_BAND = 1e-2
 #: None, or a list that gets, per pass, (closing, opening, stick-slip switches, lagging sliding
 #: contacts): what kept the iteration going (benchmarks/stacks.py reads it)
 PASS_LOG = None
+#: a dense system's passes in one kernel call (:mod:`dda.kernels.dense_passes`); False: the
+#: composed passes
+DENSE_PASSES = True
 
 
 @dataclass
@@ -263,6 +267,12 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     pinned = np.zeros(m, dtype=bool)
     lag_error = np.zeros(m)
     rules = (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
+    pattern = problem.pattern
+    if (DENSE_PASSES and PASS_LOG is None and pattern.n <= DENSE_LIMIT
+            and pattern.unknowns > 0):
+        return _dense(problem, pattern, el, history, t_stick, state, held, gap_tol,
+                      settle_friction, band, (g_se, sliding), (pn, kn, ps, length, gap0, e_row,
+                                                                i_row), bj, bk, free, rules)
     for passes in range(1, problem.max_open_close + 1):
         with section("return_map"):
             t_slip, weights, f = pass_loads(state, *laws, g_se, sliding, dgs_prev, t_n_lag,
@@ -289,6 +299,49 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
         seen.add(new_state.tobytes())
         state, dgs_prev, t_n_lag = new_state, dgs, next_lag
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
+
+
+def _dense(problem, pattern, el, history, t_stick, state, held, gap_tol, settle_friction,
+           band, hist, arrays, bj, bk, free, rules) -> OpenCloseResult:
+    """:func:`_compiled_passes` on a dense system: every pass in one kernel call
+    (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
+    round-off). Its time is the step profile's ``solve``."""
+    pn, kn, ps, length, gap0, e_row, i_row = arrays
+    m = len(el)
+    f64 = np.float64
+    dashpot = el.dashpot
+    if dashpot is None:
+        zero = np.zeros(m)
+        dashpot_args = (False, zero, zero, zero)
+    else:
+        dashpot_args = (True, as_float64(dashpot), as_float64(el.dashpot_reference),
+                        as_float64(el.release))
+    keep = pattern.keep
+    with section("solve"):
+        status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
+            problem.max_open_close, bool(settle_friction), float(band), *rules,
+            np.ascontiguousarray(problem.block_k, dtype=f64),
+            np.ascontiguousarray(problem.block_f, dtype=f64),
+            np.ascontiguousarray(problem.d_known, dtype=f64), pattern.n, pattern.block_base,
+            pattern.block_step, pattern.free_blocks, pattern.pair_base, pattern.pair_step,
+            pattern.side_row, pattern.side_block,
+            _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64), keep is not None,
+            bj, bk, free, el._spring_rows, SPRING_TERMS, e_row, i_row, gap0, pn, ps, kn,
+            length, *dashpot_args, *el.kernel_laws, *hist, t_stick, state,
+            np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
+    for _ in range(passes):
+        count_solve()
+    if status == CONVERGED:
+        return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
+                               friction_settled)
+    if status == NOT_SETTLED:
+        return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
+    reason = "Singular matrix" if status == SINGULAR else (
+        "the step's system has no finite solution")
+    return OpenCloseResult(False, passes, f"singular system: {reason}")
+
+
+_NO_KEEP = np.zeros(0, dtype=np.int64)
 
 
 def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned):

@@ -1,0 +1,208 @@
+"""A small scene's whole OPEN-CLOSE iteration in one kernel call (:mod:`dda.solvers.open_close`).
+
+On a scene whose system is solved dense (up to ``dda.solvers.linear.DENSE_LIMIT`` unknowns) a
+pass of the compiled iteration is a dozen Python-level calls around three kernels: the friction
+loads and springs (:func:`dda.kernels.open_close.pass_loads`), the impact dashpots, the dense
+matrix and right-hand side (:func:`dda.kernels.assembly.matrix_data`, :func:`rhs_data`), numpy's
+LAPACK solve, the linearized gaps ``g = g_0 + E d`` and shear increments ``I d``, and the judge
+(:func:`dda.kernels.open_close.pass_judge`); on the 2-block incline of
+``benchmarks/small_step.py`` their glue cost more than their arithmetic. :func:`dense_passes`
+runs every pass of the iteration, with the same rules in the same order:
+
+    K(s) d = F(s)                 (the pass's springs and loads for the states s)
+    g = g_0 + E d,   dg_s = I d   (linearized at the step's start)
+    s' = judge(s, g - g_rel, dg_s), settled?  else s <- s' (or one switch on a cycle)
+
+and stops when the judge says the states have settled, or after ``max_passes``.
+
+It takes the same decisions as the composed iteration and its numbers agree to round-off, not
+to the bit: numba's LAPACK solve and the gaps' sums of 12 products are not numpy's (numpy's
+``einsum`` sums them in an order a loop cannot repeat). ``tests/test_dense_passes.py`` runs
+steps both ways.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from dda.kernels.assembly import matrix_data, rhs_data
+from dda.kernels.dashpot import add_dashpot
+from dda.kernels.kinematics import pair_increments
+from dda.kernels.open_close import pass_judge, pass_loads
+
+__all__ = ["dense_passes", "CONVERGED", "NOT_SETTLED", "SINGULAR", "NOT_FINITE"]
+
+CONVERGED, NOT_SETTLED, SINGULAR, NOT_FINITE = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _solve_dense(data, n, rhs, keep, reduced):
+    """The free blocks' increments (n,) of the dense system ``data`` (n x n, row major),
+    restricted to the unknowns ``keep`` when ``reduced``; (solution, status)."""
+    k = data.reshape(n, n)
+    if reduced:
+        k = k[keep][:, keep]
+        b = rhs[keep]
+    else:
+        b = rhs
+    out = np.zeros(n)
+    try:
+        sol = np.linalg.solve(k, b)
+    except Exception:  # noqa: BLE001 (numba raises LinAlgError for a singular matrix)
+        return out, SINGULAR
+    for i in range(sol.shape[0]):
+        if not np.isfinite(sol[i]):
+            return out, NOT_FINITE
+    if reduced:
+        for i in range(keep.shape[0]):
+            out[keep[i]] = sol[i]
+    else:
+        out[:] = sol
+    return out, CONVERGED
+
+
+@njit(cache=True)
+def _seen(seen, count, state):
+    """Whether ``state`` is one of the first ``count`` rows of ``seen``."""
+    for r in range(count):
+        same = True
+        for i in range(state.shape[0]):
+            if seen[r, i] != state[i]:
+                same = False
+                break
+        if same:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _single_switch(state, proposed, gap):
+    """:func:`dda.solvers.open_close._single_switch`: only the contact whose gap is the most
+    violated changes (numpy's argmax: the first of equal ones)."""
+    pick = -1
+    best = 0.0
+    for i in range(state.shape[0]):
+        if proposed[i] == state[i]:
+            continue
+        opening = proposed[i] == 0
+        closing = state[i] == 0
+        v = 0.0
+        if opening:
+            v += gap[i]
+        if closing:
+            v += -gap[i]
+        if pick < 0 or v > best:
+            pick, best = i, v
+    out = state.copy()
+    out[pick] = proposed[pick]
+    return out
+
+
+@njit(cache=True)
+def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
+                 block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
+                 pair_step, side_row, side_block, keep, reduced, bj, bk, free, rows, terms,
+                 e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference,
+                 release, kind, mu_s, mu_d, cohesion, face, g_se, sliding, t_stick, state,
+                 held, gap_tol, t_n_lag):
+    """Every pass of one step's OPEN-CLOSE iteration on a dense system (module docstring).
+
+    Parameters
+    ----------
+    max_passes : passes allowed
+    settle_friction, band, rtol, floor, cycle_tension, relax_after : the iteration's rules
+        (:func:`dda.kernels.open_close.pass_judge`)
+    block_k, block_f, d_known : the step's block matrices, forces and known increments
+    n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
+        the dense layout of :class:`dda.solvers.linear.SystemPattern`
+    keep, reduced : the unknowns solved for (rigid blocks' strains left out) when ``reduced``
+    bj, bk, free : the contacts' blocks; the blocks with unknowns
+    rows, terms : legacy DDA's spring rows [E, I] (m, 2, 12) and their terms
+    e_row, i_row, gap0, pn, ps, kn, length : the contacts' linearization, penalties, the
+        stiffness the judge uses and the edges' lengths
+    has_dashpot, dashpot, reference, release : impact dashpots (``c / dt``), the gap their rate
+        is measured from, and the gap at which a contact lets go
+    kind, mu_s, mu_d, cohesion, face : the built-in laws per contact
+    g_se, sliding, t_stick : the pulled-back history and the stick springs' forces
+    state, held, gap_tol, t_n_lag : the first pass's states, the contacts spared the friction
+        check, the round-off of the gaps, the first lagged normal forces
+
+    Returns
+    -------
+    status : CONVERGED, NOT_SETTLED (after ``max_passes``), SINGULAR or NOT_FINITE
+    passes : the passes taken
+    d : (n_blocks, 6) the last pass's increments
+    new_state : (m,) int8 the states the last pass settled on
+    gap, dgs : (m,) its linearized gaps and shear increments
+    friction_settled : the stick and slip states settled too
+    """
+    m = state.shape[0]
+    state = state.copy()
+    held = held.copy()
+    t_n_lag = t_n_lag.copy()
+    dgs_prev = np.zeros(m)
+    flips = np.zeros(m, dtype=np.int64)
+    pinned = np.zeros(m, dtype=np.bool_)
+    lag_error = np.zeros(m)
+    seen = np.empty((max_passes + 1, m), dtype=np.int8)
+    seen[0] = state
+    n_seen = 1
+    d = d_known.copy()
+    gap = np.zeros(m)
+    dgs = np.zeros(m)
+    judged = np.zeros(m)
+    nf = free_blocks.shape[0]
+    for passes in range(1, max_passes + 1):
+        t_slip, weights, force = pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se,
+                                            sliding, dgs_prev, t_n_lag, ps, length, gap0, pn,
+                                            t_stick, e_row, i_row)
+        if has_dashpot:
+            add_dashpot(weights, force, state, dashpot, gap0, reference, e_row)
+        data = matrix_data(n * n, n, block_base, block_step, block_k, free_blocks, pair_base,
+                           pair_step, rows, terms, weights)
+        rhs = np.empty(n)
+        for s in range(nf):
+            for i in range(6):
+                rhs[6 * s + i] = block_f[free_blocks[s], i]
+        rhs = rhs_data(rhs, side_row, side_block, force, d_known, rows, terms, weights)
+        sol, status = _solve_dense(data, n, rhs, keep, reduced)
+        if status != CONVERGED:
+            return status, passes, d, state, gap, dgs, False
+        d = d_known.copy()
+        for s in range(nf):
+            for i in range(6):
+                d[free_blocks[s], i] = sol[6 * s + i]
+        dd = pair_increments(d, bj, bk)
+        for c in range(m):
+            g = 0.0
+            s_ = 0.0
+            for i in range(12):
+                g += e_row[c, i] * dd[c, i]
+                s_ += i_row[c, i] * dd[c, i]
+            gap[c] = gap0[c] + g
+            dgs[c] = s_
+            judged[c] = gap[c] - release[c] if has_dashpot else gap[c]
+        new_state, _, done, friction_settled, next_lag, lag_error, _ = pass_judge(
+            state, held, judged, dgs, t_slip, t_n_lag, lag_error, flips, pinned, gap_tol, kn,
+            ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj, bk, free,
+            settle_friction, band, passes, rtol, floor, cycle_tension, relax_after)
+        if done:
+            return CONVERGED, passes, d, new_state, gap.copy(), dgs.copy(), friction_settled
+        changed = False
+        for i in range(m):
+            if new_state[i] != state[i]:
+                changed = True
+                break
+        if changed and _seen(seen, n_seen, new_state):
+            # a cycle: legacy's explicit rule no longer spares its contacts, and only the
+            # most violated contact switches (dda.solvers.open_close)
+            for i in range(m):
+                held[i] = held[i] and new_state[i] == state[i]
+            new_state = _single_switch(state, new_state, judged)
+        seen[n_seen] = new_state
+        n_seen += 1
+        state = new_state
+        dgs_prev = dgs.copy()
+        t_n_lag = next_lag
+    return NOT_SETTLED, max_passes, d, state, gap, dgs, False
