@@ -10,10 +10,10 @@ import pytest
 
 import dda
 from dda.contact import CoulombSingle, JointMaterial, StaticDynamicTransition
-from dda.materials import LinearElastic
 from dda.solvers import open_close
-from tests.conftest import box, incline_scene, stack_scene
+from tests.conftest import incline_scene, stack_scene
 from tests.stability import scenes as S
+from tests.test_open_close_kernel import CASES as KERNEL_CASES
 
 
 def _without_dashpot():
@@ -26,20 +26,6 @@ def _rigid():
     return incline_scene(25.0, rigid=True)[0], 1e-3, 0.3
 
 
-def _two_laws():
-    """A block on a block on a base, pushed sideways: Coulomb with cohesion below, the
-    static-to-dynamic transition by faces above."""
-    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
-    scene = dda.Scene(gravity=9.81)
-    scene.add_block(box(-2.0, -0.5, 4.0, 0.5), rock, fixed=True)
-    low = scene.add_block(box(-0.5, 0.0, 1.0, 0.5), rock, velocity=(0.3, 0.0))
-    top = scene.add_block(box(-0.3, 0.5, 0.6, 0.4), rock, velocity=(0.8, 0.0))
-    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(phi=25.0, cohesion=1e3)))
-    scene.set_joint(JointMaterial(1e9, 1e9, StaticDynamicTransition(30.0, 20.0)),
-                    between=(low, top))
-    return scene, 1e-3, 0.25
-
-
 CASES = {
     "incline, impact dashpot": lambda: S.incline(CoulombSingle(phi=20.0))[:2] + (0.2,),
     "incline, no dashpot": _without_dashpot,
@@ -48,7 +34,7 @@ CASES = {
     "resting on faces": lambda: S.incline(StaticDynamicTransition(25.0, 20.0), kick=0.0,
                                           slope=24.0)[:2] + (0.2,),
     "rigid block (fewer unknowns)": _rigid,
-    "two laws": _two_laws,
+    "two laws": KERNEL_CASES["two laws"],  # Coulomb with cohesion below, faces above
     "3 x 3 stack": lambda: (stack_scene(3), 1e-3, 0.05),
     "tower": lambda: S.tower(6)[:2] + (0.05,),
 }
