@@ -117,11 +117,11 @@ def section(name: str) -> _Section:
                          f"{', '.join(SECTIONS)}") from None
 
 
-def count_solve() -> None:
-    """Count one linear solve in the active profile."""
+def count_solve(n: int = 1) -> None:
+    """Count ``n`` linear solves in the active profile."""
     p = _active.get()
     if p is not None:
-        p.solves += 1
+        p.solves += n
 
 
 _SECTION_OF = {name: _Section(name) for name in SECTIONS}

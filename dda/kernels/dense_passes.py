@@ -31,7 +31,8 @@ from dda.kernels.dashpot import add_dashpot
 from dda.kernels.kinematics import pair_increments
 from dda.kernels.open_close import pass_judge, pass_loads
 
-__all__ = ["dense_passes", "CONVERGED", "NOT_SETTLED", "SINGULAR", "NOT_FINITE"]
+__all__ = ["dense_passes", "single_switch", "CONVERGED", "NOT_SETTLED", "SINGULAR",
+           "NOT_FINITE"]
 
 CONVERGED, NOT_SETTLED, SINGULAR, NOT_FINITE = 0, 1, 2, 3
 
@@ -77,20 +78,24 @@ def _seen(seen, count, state):
 
 
 @njit(cache=True)
-def _single_switch(state, proposed, gap):
-    """:func:`dda.solvers.open_close._single_switch`: only the contact whose gap is the most
-    violated changes (numpy's argmax: the first of equal ones)."""
+def single_switch(state, proposed, gap):
+    """Break an OPEN-CLOSE cycle: change only the contact whose gap is the most violated.
+
+    When switching every inconsistent contact at once brings back a state already tried (a
+    block that bounces off a stiff contact and falls back into it), changing one contact at a
+    time is an active-set step that does not cycle. The violation is the gap of an opening
+    contact, minus the gap of a closing one, 0 for a stick / slip switch; of equal ones the
+    first changes (``numpy.argmax``'s rule). Both OPEN-CLOSE paths use it.
+    """
     pick = -1
     best = 0.0
     for i in range(state.shape[0]):
         if proposed[i] == state[i]:
             continue
-        opening = proposed[i] == 0
-        closing = state[i] == 0
         v = 0.0
-        if opening:
+        if proposed[i] == 0:  # opening
             v += gap[i]
-        if closing:
+        if state[i] == 0:  # closing
             v += -gap[i]
         if pick < 0 or v > best:
             pick, best = i, v
@@ -102,7 +107,7 @@ def _single_switch(state, proposed, gap):
 @njit(cache=True)
 def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
                  block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
-                 pair_step, side_row, side_block, keep, reduced, bj, bk, free, rows, terms,
+                 pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free,
                  e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference,
                  release, kind, mu_s, mu_d, cohesion, face, g_se, sliding, t_stick, state,
                  held, gap_tol, t_n_lag):
@@ -117,8 +122,8 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
         the dense layout of :class:`dda.solvers.linear.SystemPattern`
     keep, reduced : the unknowns solved for (rigid blocks' strains left out) when ``reduced``
-    bj, bk, free : the contacts' blocks; the blocks with unknowns
     rows, terms : legacy DDA's spring rows [E, I] (m, 2, 12) and their terms
+    bj, bk, free : the contacts' blocks; the blocks with unknowns
     e_row, i_row, gap0, pn, ps, kn, length : the contacts' linearization, penalties, the
         stiffness the judge uses and the edges' lengths
     has_dashpot, dashpot, reference, release : impact dashpots (``c / dt``), the gap their rate
@@ -199,7 +204,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
             # most violated contact switches (dda.solvers.open_close)
             for i in range(m):
                 held[i] = held[i] and new_state[i] == state[i]
-            new_state = _single_switch(state, new_state, judged)
+            new_state = single_switch(state, new_state, judged)
         seen[n_seen] = new_state
         n_seen += 1
         state = new_state

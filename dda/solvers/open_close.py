@@ -101,6 +101,7 @@ import numpy as np
 from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.contact.tangent import SPRING_TERMS
 from dda.kernels.dense_passes import CONVERGED, NOT_SETTLED, SINGULAR, dense_passes
+from dda.kernels.dense_passes import single_switch as _single_switch
 from dda.kernels.open_close import (
     as_float64,
     kernel_history,
@@ -259,20 +260,20 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
             el.e_row, el.i_row, t_stick))
     bj, bk = (np.asarray(b, dtype=np.int64) for b in (el.bj, el.bk))
     free = np.asarray(problem.free, dtype=np.bool_)
-    t_n_lag = np.array(el.contacts.t_n, dtype=f64)
-    dgs_prev = np.zeros(m)
     state = np.asarray(state, dtype=np.int8)
-    seen = {state.tobytes()}
-    flips = np.zeros(m, dtype=np.int64)
-    pinned = np.zeros(m, dtype=bool)
-    lag_error = np.zeros(m)
     rules = (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
     pattern = problem.pattern
     if (DENSE_PASSES and PASS_LOG is None and pattern.n <= DENSE_LIMIT
             and pattern.unknowns > 0):
-        return _dense(problem, pattern, el, history, t_stick, state, held, gap_tol,
-                      settle_friction, band, (g_se, sliding), (pn, kn, ps, length, gap0, e_row,
-                                                                i_row), bj, bk, free, rules)
+        return _dense(problem, pattern, el, history, state, held, gap_tol, settle_friction,
+                      band, rules, (bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length),
+                      (g_se, sliding, t_stick))
+    t_n_lag = np.array(el.contacts.t_n, dtype=f64)
+    dgs_prev = np.zeros(m)
+    seen = {state.tobytes()}
+    flips = np.zeros(m, dtype=np.int64)
+    pinned = np.zeros(m, dtype=bool)
+    lag_error = np.zeros(m)
     for passes in range(1, problem.max_open_close + 1):
         with section("return_map"):
             t_slip, weights, f = pass_loads(state, *laws, g_se, sliding, dgs_prev, t_n_lag,
@@ -301,21 +302,21 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
 
 
-def _dense(problem, pattern, el, history, t_stick, state, held, gap_tol, settle_friction,
-           band, hist, arrays, bj, bk, free, rules) -> OpenCloseResult:
+def _dense(problem, pattern, el, history, state, held, gap_tol, settle_friction, band, rules,
+           contacts, start) -> OpenCloseResult:
     """:func:`_compiled_passes` on a dense system: every pass in one kernel call
     (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
-    round-off). Its time is the step profile's ``solve``."""
-    pn, kn, ps, length, gap0, e_row, i_row = arrays
+    round-off). ``contacts`` are the kernel's per-contact arrays (``bj`` to ``length``),
+    ``start`` the step's pulled-back ``g_se``, ``sliding`` and stick forces. Its time is the
+    step profile's ``solve``."""
     m = len(el)
     f64 = np.float64
-    dashpot = el.dashpot
-    if dashpot is None:
+    if el.dashpot is None:
         zero = np.zeros(m)
-        dashpot_args = (False, zero, zero, zero)
+        dashpot = (False, zero, zero, zero)
     else:
-        dashpot_args = (True, as_float64(dashpot), as_float64(el.dashpot_reference),
-                        as_float64(el.release))
+        dashpot = (True, as_float64(el.dashpot), as_float64(el.dashpot_reference),
+                   as_float64(el.release))
     keep = pattern.keep
     with section("solve"):
         status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
@@ -326,11 +327,9 @@ def _dense(problem, pattern, el, history, t_stick, state, held, gap_tol, settle_
             pattern.block_step, pattern.free_blocks, pattern.pair_base, pattern.pair_step,
             pattern.side_row, pattern.side_block,
             _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64), keep is not None,
-            bj, bk, free, el._spring_rows, SPRING_TERMS, e_row, i_row, gap0, pn, ps, kn,
-            length, *dashpot_args, *el.kernel_laws, *hist, t_stick, state,
-            np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
-    for _ in range(passes):
-        count_solve()
+            el._spring_rows, SPRING_TERMS, *contacts, *dashpot, *el.kernel_laws, *start,
+            state, np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
+    count_solve(passes)
     if status == CONVERGED:
         return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
                                friction_settled)
@@ -521,21 +520,3 @@ def _unhold_cycling(held, state, proposed):
     reach this rule (their results are the same to the bit with it).
     """
     return held & (proposed == state)
-
-
-def _single_switch(state, proposed, gap):
-    """Break an OPEN-CLOSE cycle: change only the contact whose gap is the most violated.
-
-    When switching every inconsistent contact at once brings back a state already tried (a
-    block that bounces off a stiff contact and falls back into it), changing one contact at a
-    time is an active-set step that does not cycle.
-    """
-    changed = np.flatnonzero(proposed != state)
-    opening = proposed[changed] == OPEN
-    closing = state[changed] == OPEN
-    violation = np.where(opening, gap[changed], 0.0) + np.where(closing, -gap[changed], 0.0)
-    violation = np.where(opening | closing, violation, 0.0)
-    pick = changed[int(np.argmax(violation))]
-    out = state.copy()
-    out[pick] = proposed[pick]
-    return out
