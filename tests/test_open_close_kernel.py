@@ -84,11 +84,13 @@ CASES = {
 @pytest.mark.parametrize("solver", [dda.solvers.LegacyPullBack, dda.solvers.NewtonRaphson])
 @pytest.mark.parametrize("case", CASES)
 def test_compiled_passes_give_the_numpy_iterations_bits(case, solver, monkeypatch):
-    """The composed compiled passes (a dense system's passes in one kernel call agree with
-    them to round-off: tests/test_dense_passes.py)."""
-    from dda.solvers import open_close
+    """The composed compiled passes (a dense system's passes, and its Newton iterations, in
+    one kernel call agree with them to round-off: tests/test_dense_passes.py,
+    tests/test_dense_newton.py)."""
+    from dda.solvers import newton, open_close
 
     monkeypatch.setattr(open_close, "DENSE_PASSES", False)
+    monkeypatch.setattr(newton, "DENSE_NEWTON", False)
     runs = []
     for compiled in (False, True):
         monkeypatch.setattr(element, "KERNEL_LAWS", compiled)

@@ -31,14 +31,14 @@ from dda.kernels.dashpot import add_dashpot
 from dda.kernels.kinematics import pair_increments
 from dda.kernels.open_close import pass_judge, pass_loads
 
-__all__ = ["dense_passes", "single_switch", "CONVERGED", "NOT_SETTLED", "SINGULAR",
+__all__ = ["dense_passes", "single_switch", "solve_dense", "CONVERGED", "NOT_SETTLED", "SINGULAR",
            "NOT_FINITE"]
 
 CONVERGED, NOT_SETTLED, SINGULAR, NOT_FINITE = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def _solve_dense(data, n, rhs, keep, reduced):
+def solve_dense(data, n, rhs, keep, reduced):
     """The free blocks' increments (n,) of the dense system ``data`` (n x n, row major),
     restricted to the unknowns ``keep`` when ``reduced``; (solution, status)."""
     k = data.reshape(n, n)
@@ -171,7 +171,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
             for i in range(6):
                 rhs[6 * s + i] = block_f[free_blocks[s], i]
         rhs = rhs_data(rhs, side_row, side_block, force, d_known, rows, terms, weights)
-        sol, status = _solve_dense(data, n, rhs, keep, reduced)
+        sol, status = solve_dense(data, n, rhs, keep, reduced)
         if status != CONVERGED:
             return status, passes, d, state, gap, dgs, False
         d = d_known.copy()

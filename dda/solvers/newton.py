@@ -33,9 +33,12 @@ import numpy as np
 from dda._checks import finite_number
 from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.kernels.assembly import newton_residuals
-from dda.profiling import section
+from dda.kernels.dense_newton import CONVERGED as DENSE_CONVERGED
+from dda.kernels.dense_newton import DIVERGED, NOT_CONVERGED, SINGULAR, dense_newton
+from dda.kernels.open_close import as_float64, kernel_history, kernel_history_dict
+from dda.profiling import count_solve, section
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
-from dda.solvers.linear import SingularSystemError, assemble_and_solve, assemble_vector
+from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve, assemble_vector
 from dda.solvers.open_close import open_close
 
 __all__ = ["NewtonRaphson"]
@@ -126,6 +129,10 @@ class NewtonRaphson(NonlinearSolver):
         max_iter = self.max_iter if max_iter is None else max_iter
         el = problem.element
         free = problem.free
+        pattern = problem.pattern
+        if (DENSE_NEWTON and pattern.n <= DENSE_LIMIT and pattern.unknowns > 0
+                and len(el) and el.kernel_laws is not None):
+            return self._dense(problem, d, max_iter)
         d = d.copy()
         norms: list[float] = []
         factor = problem.factor(False)
@@ -186,6 +193,56 @@ class NewtonRaphson(NonlinearSolver):
         trial = el.trial_contacts(state, resp.t_n, resp.t_s, resp.history)
         return StepSolution(d, trial, True, 0, it, "", norms)
 
+    def _dense(self, problem: StepProblem, d: np.ndarray, max_iter: int) -> StepSolution:
+        """:meth:`iterate` on a dense system with the built-in laws: every iteration in one
+        kernel call (:func:`dda.kernels.dense_newton.dense_newton`; the same decisions, the
+        numbers to round-off). Its time is the step profile's ``solve``."""
+        el, pattern = problem.element, problem.pattern
+        g = el.geometry
+        keep = pattern.keep
+        rigid = problem.rigid if problem.rigid is not None else np.zeros(len(problem.free))
+        dashpot = el.dashpot is not None
+        g_se, slip, sliding = kernel_history(el.contacts.history, len(el))
+        with section("solve"):
+            (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
+             sliding) = dense_newton(
+                as_float64(d), max_iter, float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
+                CYCLE_LENGTH, as_float64(problem.block_k), as_float64(problem.block_f),
+                np.asarray(problem.free, dtype=np.bool_), np.asarray(rigid, dtype=np.bool_),
+                pattern.n, pattern.block_base, pattern.block_step, pattern.free_blocks,
+                pattern.pair_base, pattern.pair_step, pattern.side_row, pattern.side_block,
+                _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64),
+                keep is not None, np.asarray(el.bj, dtype=np.int64),
+                np.asarray(el.bk, dtype=np.int64), *(as_float64(a) for a in (
+                    g.p1, g.p2, g.p3, *el.maps, el.contacts.xi0, el.shear0, el.release)),
+                dashpot, as_float64(el.judge_stiffness), as_float64(el.normal_penalty),
+                as_float64(el.shear_penalty), as_float64(el.length), *el.kernel_laws, g_se,
+                slip, sliding)
+        # a solve for every accepted iterate but the last, and for the last when it failed
+        count_solve(len(norms) - 1 + (status >= SINGULAR))
+        norms = norms.tolist()
+        if status == DENSE_CONVERGED:
+            state = np.where(closed, np.where(slipping, SLIP, STICK), OPEN).astype(np.int8)
+            history = kernel_history_dict(el.contacts.history, g_se, slip, sliding)
+            trial = el.trial_contacts(state, spring, t_s, history)
+            return StepSolution(d, trial, True, 0, it, "", norms)
+        if status == DIVERGED:
+            reason = "Newton-Raphson diverged (non-finite residual)"
+        elif status == NOT_CONVERGED:
+            reason = (f"Newton-Raphson did not converge in {max_iter} iterations "
+                      f"(|R| = {norms[-1]:.3g}, {norms[-1] / scale:.3g} of the forces)")
+        else:
+            reason = "singular tangent: " + ("Singular matrix" if status == SINGULAR
+                                             else "the step's system has no finite solution")
+        return StepSolution(None, None, False, 0, it, reason, norms)
+
+
+DENSE_NEWTON = True
+"""Whether a dense system's iterations (up to ``DENSE_LIMIT`` unknowns, the built-in laws)
+run in one kernel call (:func:`dda.kernels.dense_newton.dense_newton`); False: the composed
+iterate, every scene."""
+
+_NO_KEEP = np.zeros(0, dtype=np.int64)
 
 RESIDUAL_KERNEL = True
 """Whether an iterate's out-of-balance vectors come from one compiled pass

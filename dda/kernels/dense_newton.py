@@ -1,0 +1,221 @@
+"""A small scene's Newton-Raphson iterations in one kernel call (:mod:`dda.solvers.newton`).
+
+On a scene whose system is solved dense (up to ``dda.solvers.linear.DENSE_LIMIT`` unknowns)
+an iterate of :meth:`dda.solvers.newton.NewtonRaphson.iterate` is some forty Python-level
+calls around a few kernels: the trial points ``x + A d``, their first variations
+(:func:`dda.kernels.kinematics.first_variations`), the return map and residual rows
+(:func:`dda.kernels.open_close.contact_response`), the out-of-balance vectors
+(:func:`dda.kernels.assembly.newton_residuals`), the consistent tangent's rows
+(:func:`dda.kernels.tangent.tangent_rows`), the dense matrix and LAPACK's solve; on the
+2-block incline of ``benchmarks/small_step.py`` the glue cost three times the arithmetic.
+:func:`dense_newton` runs every iterate with the same rules in the same order:
+
+    R(d) = K~ d - F~ + sum_c r_c(d),   converged when |R| <= tol max(|F~|, |K~ d|, sum |r_c|)
+    (or at the round-off floor), else
+    K_T(d) s = -R(d),   d <- d + s    (halved when the contacts' pattern cycles)
+
+It takes the same decisions as the composed iterate and its numbers agree to round-off, not
+to the bit (numba's LAPACK solve and the trial points' sums are not numpy's).
+``tests/test_dense_newton.py`` runs steps both ways.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from dda.kernels.assembly import matrix_data, newton_residuals, rhs_data
+from dda.kernels.dense_passes import CONVERGED as SOLVED
+from dda.kernels.dense_passes import SINGULAR as SINGULAR_SOLVE
+from dda.kernels.dense_passes import solve_dense
+from dda.kernels.kinematics import first_variations, pair_increments
+from dda.kernels.open_close import contact_response
+from dda.kernels.tangent import tangent_rows
+
+__all__ = ["dense_newton", "TANGENT_TERMS", "CONVERGED", "NOT_CONVERGED", "DIVERGED",
+           "SINGULAR", "NOT_FINITE"]
+
+CONVERGED, NOT_CONVERGED, DIVERGED, SINGULAR, NOT_FINITE = 0, 1, 2, 3, 4
+
+#: the consistent tangent's terms on the rows E, I, S, H, B: p_n E^T E + I^T S + B^T H + H^T B
+#: (:func:`dda.contact.tangent.consistent_tangent`)
+TANGENT_TERMS = np.array([[0, 0], [1, 2], [4, 3], [3, 4]], dtype=np.int64)
+
+
+@njit(cache=True)
+def _norm(a):
+    """The 2-norm of all entries of ``a``."""
+    s = 0.0
+    for v in a.ravel():
+        s += v * v
+    return math.sqrt(s)
+
+
+@njit(cache=True)
+def _moved(p, a, dd):
+    """(m, 2) the points ``p + A dd``."""
+    out = np.empty_like(p)
+    for c in range(p.shape[0]):
+        for k in range(2):
+            s = 0.0
+            for j in range(12):
+                s += a[c, k, j] * dd[c, j]
+            out[c, k] = p[c, k] + s
+    return out
+
+
+@njit(cache=True)
+def _at_round_off(norm, norms, count, floor):
+    """|R| is as small as round-off allows: below ``floor``, with two earlier iterates, and
+    no longer decreasing (more than half the smallest before it;
+    :func:`dda.solvers.newton._at_round_off`)."""
+    if count < 2 or norm > floor:
+        return False
+    smallest = norms[0]
+    for k in range(1, count):
+        smallest = min(smallest, norms[k])
+    return norm > 0.5 * smallest
+
+
+@njit(cache=True)
+def _cycle_back(pattern, patterns, count, cycle_length):
+    """How many accepted iterates back (2 to ``cycle_length``) ``pattern`` was, or 0."""
+    for back in range(2, min(cycle_length, count) + 1):
+        row = count - back
+        same = True
+        for i in range(pattern.shape[0]):
+            if patterns[row, i] != pattern[i]:
+                same = False
+                break
+        if same:
+            return back
+    return 0
+
+
+@njit(cache=True)
+def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, block_k, block_f,
+                 free, rigid, n, block_base, block_step, free_blocks, pair_base, pair_step,
+                 side_row, side_block, keep, reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0,
+                 shear0, release, has_dashpot, kn, pn, ps, length, kind, mu_s, mu_d, cohesion,
+                 face, g_se, slip, sliding):
+    """Newton-Raphson iterations of one step on a dense system (module docstring).
+
+    Parameters
+    ----------
+    d : (n_blocks, 6) the first iterate (the known blocks' rows are their increments)
+    max_iter, tol, round_off, halvings_allowed, cycle_length : the iteration's rules
+        (:mod:`dda.solvers.newton`: ``max_iter``, ``tol``, ``ROUND_OFF``,
+        ``LINE_SEARCH_HALVINGS``, ``CYCLE_LENGTH``)
+    block_k, block_f, free, rigid : the step's block matrices and forces, the blocks with
+        unknowns, the blocks without strain unknowns
+    n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
+        the dense layout of :class:`dda.solvers.linear.SystemPattern`
+    keep, reduced : the unknowns solved for when ``reduced``
+    bj, bk : the contacts' blocks
+    p1, p2, p3, a1, a2, a3, xi0, shear0 : the contacts' points at the step's start, their
+        maps, the shear reference and the start's shear gap
+    release, has_dashpot, kn, pn, ps, length : the gap a contact lets go at, the normal
+        force's stiffness (with the dashpot's), the penalties, the edges' lengths
+    kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding : the built-in laws per contact
+        and the committed history
+
+    Returns
+    -------
+    status : CONVERGED, NOT_CONVERGED (after ``max_iter``), DIVERGED (non-finite |R|),
+        SINGULAR or NOT_FINITE (the tangent's solve)
+    it : the iterations counted as the composed iterate counts them
+    d : (n_blocks, 6) the last iterate
+    norms : |R| of the accepted iterates
+    scale : the size of the forces the last |R| was judged against
+    closed, slipping, spring, t_s, g_se, slip, sliding : the last iterate's contacts
+        (:func:`dda.kernels.open_close.contact_response`)
+    """
+    m = bj.shape[0]
+    nf = free_blocks.shape[0]
+    d = d.copy()
+    zero_known = np.zeros_like(d)
+    norms = np.empty(max_iter + 1)
+    n_norms = 0
+    patterns = np.empty((max_iter + 1, m), dtype=np.int8)
+    force_norm = 0.0
+    for b in range(free.shape[0]):
+        if free[b]:
+            for i in range(6):
+                force_norm += block_f[b, i] * block_f[b, i]
+    force_norm = math.sqrt(force_norm)
+    base = d.copy()
+    step = np.zeros_like(d)
+    has_base = False
+    halvings = 0
+    weights = np.ones((m, 4))
+    it = 0
+    scale = 1.0
+    status = CONVERGED
+    for it in range(max_iter + 1):
+        dd = pair_increments(d, bj, bk)
+        q1, q2, q3 = _moved(p1, a1, dd), _moved(p2, a2, dd), _moved(p3, a3, dd)
+        length_t, tau, normal, gap, xi, shear, e_row, i_row = first_variations(
+            q1, q2, q3, xi0, a1, a2, a3)
+        (closed, slipping, spring, t_s, g_out, slip_out, sliding_out, kss, ksn, t_n,
+         residual) = contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding,
+                                      gap, shear, shear0, release, has_dashpot, kn, pn, ps,
+                                      length, e_row, i_row)
+        block_r, r_free, inertia_free, contact_free = newton_residuals(
+            block_k, d, block_f, free, rigid, bj, bk, residual)
+        norm = _norm(r_free)
+        scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
+        if norm <= tol * scale or _at_round_off(norm, norms, n_norms, round_off * scale):
+            norms[n_norms] = norm
+            n_norms += 1
+            break
+        pattern = np.empty(m, dtype=np.int8)
+        for c in range(m):
+            if not closed[c]:
+                pattern[c] = 0
+            elif slipping[c]:  # the sliding direction: numpy.sign's -1, 0, 1, twice
+                pattern[c] = 2 if t_s[c] > 0.0 else (-2 if t_s[c] < 0.0 else 0)
+            else:
+                pattern[c] = 1
+        back = _cycle_back(pattern, patterns, n_norms, cycle_length)
+        if (has_base and halvings < halvings_allowed and it < max_iter and back > 0
+                and norm > 0.5 * norms[n_norms - back]):
+            halvings += 1
+            d = base + 0.5 ** halvings * step
+            continue
+        norms[n_norms] = norm
+        patterns[n_norms] = pattern
+        n_norms += 1
+        if not math.isfinite(norm):
+            status = DIVERGED
+            break
+        if it == max_iter:
+            status = NOT_CONVERGED
+            break
+        rows = tangent_rows(a1, a2, a3, normal, tau, xi, xi0, gap, shear, length_t, e_row,
+                            i_row, kss, ksn, t_n, t_s, closed)
+        for c in range(m):
+            weights[c, 0] = kn[c] if closed[c] else 0.0
+        data = matrix_data(n * n, n, block_base, block_step, block_k, free_blocks, pair_base,
+                           pair_step, rows, TANGENT_TERMS, weights)
+        rhs = np.empty(n)
+        for s in range(nf):
+            for i in range(6):
+                rhs[6 * s + i] = -block_r[free_blocks[s], i]
+        rhs = rhs_data(rhs, side_row, side_block, -residual, zero_known, rows, TANGENT_TERMS,
+                       weights)
+        sol, solved = solve_dense(data, n, rhs, keep, reduced)
+        if solved != SOLVED:
+            status = SINGULAR if solved == SINGULAR_SOLVE else NOT_FINITE
+            break
+        step = np.zeros_like(d)
+        for s in range(nf):
+            for i in range(6):
+                step[free_blocks[s], i] = sol[6 * s + i]
+        base = d
+        has_base = True
+        halvings = 0
+        d = d + step
+    return (status, it, d, norms[:n_norms], scale, closed, slipping, spring, t_s, g_out,
+            slip_out, sliding_out)

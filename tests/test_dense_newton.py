@@ -1,0 +1,134 @@
+"""A small scene's Newton-Raphson iterations in one kernel call (dda.kernels.dense_newton)
+against the composed iterate: the same decisions, the same numbers to round-off."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import dda
+from dda.solvers import newton
+from tests.conftest import stack_scene
+from tests.test_dense_passes import CASES
+
+
+def _run(case, dense, monkeypatch):
+    monkeypatch.setattr(newton, "DENSE_NEWTON", dense)
+    scene, dt, duration = CASES[case]()
+    sim = dda.Simulation(scene, dt=dt, solver=dda.solvers.NewtonRaphson())
+    result = sim.run(duration, progress=False)
+    return sim.state, result.stats, dt
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_one_kernel_takes_the_composed_iterations_decisions(case, monkeypatch):
+    (a, sa, dt), (b, sb, _) = (_run(case, dense, monkeypatch) for dense in (False, True))
+    assert np.count_nonzero(sa["closed"]) > 0 and np.sum(sa["iterations"]) > 0
+    for name in ("open_close_passes", "closed", "sliding", "time"):
+        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
+    # where a residual sits at the round-off floor of the convergence test one more or one
+    # fewer iteration may be taken (tests/test_dense_passes.py)
+    assert abs(int(np.sum(sa["iterations"])) - int(np.sum(sb["iterations"]))) <= 2
+    assert abs(int(np.sum(sa["solves"])) - int(np.sum(sb["solves"]))) <= 2
+    size = np.ptp(a.x, axis=0).max()
+    np.testing.assert_allclose(b.x, a.x, rtol=0.0, atol=1e-11 * size)
+    np.testing.assert_allclose(b.velocity, a.velocity, rtol=0.0, atol=1e-9 * size / dt)
+    for name in ("t_n", "t_s"):
+        x, y = getattr(a.contacts, name), getattr(b.contacts, name)
+        np.testing.assert_allclose(y, x, rtol=0.0, atol=1e-8 * np.abs(a.contacts.t_n).max())
+    for name in a.contacts.history:  # lengths (the elastic shear gap, the slip) and flags
+        x, y = a.contacts.history[name], b.contacts.history[name]
+        np.testing.assert_allclose(y, x, rtol=0.0, atol=1e-11 * size, err_msg=name)
+
+
+def _problem_and_start(monkeypatch, scene=None, step=3):
+    """A StepProblem of a Newton run of the 3 x 3 stack (its ``step``-th step) and the
+    predictor's increments Newton iterates from."""
+    captured = []
+    original = newton.NewtonRaphson.iterate
+
+    def capture(self, problem, d, max_iter=None):
+        captured.append((problem, d.copy()))
+        return original(self, problem, d, max_iter)
+
+    monkeypatch.setattr(newton.NewtonRaphson, "iterate", capture)
+    sim = dda.Simulation(scene or stack_scene(3), dt=1e-3, solver=dda.solvers.NewtonRaphson())
+    sim.run(step * 1e-3, progress=False)
+    monkeypatch.setattr(newton.NewtonRaphson, "iterate", original)
+    return captured[-1]
+
+
+def _both(problem, d, monkeypatch, **kw):
+    out = []
+    for dense in (False, True):
+        monkeypatch.setattr(newton, "DENSE_NEWTON", dense)
+        out.append(newton.NewtonRaphson(**kw).iterate(replace(problem), d))
+    return out
+
+
+def test_an_iterate_gives_the_composed_residuals_from_a_perturbed_start(monkeypatch):
+    """From a start 0.1 mm off the predictor at a penalty of 1e10 N/m (contacts that change
+    state, patterns that cycle and are halved) both paths take the same 25 iterations, their
+    |R| agree to round-off of the forces, and they end on the same contacts."""
+    problem, d = _problem_and_start(monkeypatch)
+    rng = np.random.default_rng(3)
+    start = d.copy()
+    free = problem.free
+    start[free, :2] += 1e-4 * rng.standard_normal((np.count_nonzero(free), 2))
+    start[free, 2] += 1e-5 * rng.standard_normal(np.count_nonzero(free))
+    a, b = _both(problem, start, monkeypatch)
+    assert a.converged and b.converged
+    assert a.iterations == b.iterations >= 10
+    # an iteration that halves a cycling step records no |R|
+    assert len(a.residual_norms) == len(b.residual_norms) < a.iterations + 1
+    scale = np.abs(problem.block_f[free]).max()
+    np.testing.assert_allclose(b.residual_norms, a.residual_norms, rtol=1e-6,
+                               atol=1e-9 * scale)
+    np.testing.assert_allclose(b.d, a.d, rtol=0.0, atol=1e-12)
+    np.testing.assert_array_equal(b.contacts.state, a.contacts.state)
+    np.testing.assert_allclose(b.contacts.t_n, a.contacts.t_n, rtol=1e-9,
+                               atol=1e-9 * np.abs(a.contacts.t_n).max())
+
+
+def test_an_iterate_that_runs_out_says_so_alike(monkeypatch):
+    problem, d = _problem_and_start(monkeypatch)
+    start = d.copy()
+    start[problem.free, 1] += 1e-3
+    a, b = _both(problem, start, monkeypatch, max_iter=1)
+    for s in (a, b):
+        assert not s.converged
+        assert s.reason.startswith("Newton-Raphson did not converge in 1 iterations (|R| = ")
+    assert a.iterations == b.iterations == 1
+    assert a.reason.split("(")[1][:6] == b.reason.split("(")[1][:6]  # |R| to 3 digits
+    np.testing.assert_allclose(b.residual_norms, a.residual_norms, rtol=1e-6)
+
+
+@pytest.mark.parametrize("broken, reason", [
+    (lambda p: replace(p, block_k=np.zeros_like(p.block_k)), "singular tangent: "),
+    (lambda p: replace(p, block_f=np.full_like(p.block_f, np.nan)),
+     "Newton-Raphson diverged (non-finite residual)")])
+def test_a_failed_iterate_is_reported_alike(broken, reason, monkeypatch):
+    """A tangent without the blocks' inertia (open contacts hold nothing) is singular, and
+    NaN loads give a non-finite residual: both paths say so at the same iteration."""
+    problem, d = _problem_and_start(monkeypatch, step=1)
+    problem = broken(problem)
+    a, b = _both(problem, d, monkeypatch)
+    for s in (a, b):
+        assert not s.converged and s.reason.startswith(reason), s.reason
+    assert a.iterations == b.iterations
+    assert len(a.residual_norms) == len(b.residual_norms)
+
+
+def test_the_dense_iterate_ran_and_counts_its_solves(monkeypatch):
+    """The comparison is not of one path with itself: the kernel's numbers differ from the
+    composed iterate's in the last bits, and it counts a solve per iteration as the
+    composed one does."""
+    problem, d = _problem_and_start(monkeypatch)
+    start = d.copy()
+    start[problem.free, 0] += 1e-3
+    a, b = _both(problem, start, monkeypatch)
+    assert not np.array_equal(a.d, b.d)
+    (_, sa, _), (_, sb, _) = (_run("3 x 3 stack", dense, monkeypatch) for dense in (False, True))
+    np.testing.assert_array_equal(sa["solves"], sb["solves"])
