@@ -22,6 +22,8 @@ times, before the next step is taken.
 Later iterations whose contacts keep their states (but for ``NEAR_SWITCHES``) solve by GMRES
 preconditioned with the last factorization of the tangent
 (:meth:`dda.solvers.sparse_factor.SparseFactor.solve_near`) instead of factorizing again.
+On a dense system with the built-in laws every iteration runs in one kernel call
+(:mod:`dda.kernels.dense_newton`, ``DENSE_NEWTON``): the same rules, the numbers to round-off.
 """
 
 from __future__ import annotations
