@@ -20,9 +20,10 @@ assembly
     building the global matrix and right-hand side (and residual vectors)
 solve
     factorization and solution of the linear system; on a scene solved dense with the
-    built-in friction laws, the whole OPEN-CLOSE iteration and the whole Newton-Raphson
-    iteration (their kinematics, return maps and assembly too: one kernel call each,
-    :mod:`dda.kernels.dense_passes`, :mod:`dda.kernels.dense_newton`)
+    built-in friction laws, the whole OPEN-CLOSE iteration (with legacy DDA's pull-back and
+    step end) and the whole Newton-Raphson iteration (their kinematics, return maps and
+    assembly too: one kernel call each, :mod:`dda.kernels.dense_passes`,
+    :mod:`dda.kernels.dense_newton`)
 guard
     the penetration guard: every vertex inside another block at the end of the step, found
     geometrically and checked against the closed contacts (:mod:`dda.contact.penetration`)

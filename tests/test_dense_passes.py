@@ -10,7 +10,7 @@ import pytest
 
 import dda
 from dda.contact import CoulombSingle, JointMaterial, StaticDynamicTransition
-from dda.solvers import open_close
+from dda.solvers import legacy, open_close
 from tests.conftest import incline_scene, stack_scene
 from tests.stability import scenes as S
 from tests.test_open_close_kernel import CASES as KERNEL_CASES
@@ -107,3 +107,44 @@ def test_a_singular_pass_is_reported_alike(broken, reason, monkeypatch):
     for oc in out:
         assert not oc.converged and oc.reason.startswith(reason), oc.reason
     assert out[0].passes == out[1].passes
+
+
+def _run_legacy(case, fused, monkeypatch):
+    monkeypatch.setattr(legacy, "LEGACY_DENSE_STEP", fused)
+    scene, dt, duration = CASES[case]()
+    sim = dda.Simulation(scene, dt=dt, solver=dda.solvers.LegacyPullBack())
+    result = sim.run(duration, progress=False)
+    return sim.state, result.stats
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_legacy_step_in_one_call_gives_the_passes_kernels_bits(case, monkeypatch):
+    """Legacy DDA's pull-back, passes and step end in one kernel call
+    (dda.kernels.dense_passes.legacy_dense_step) are the start's, the passes' and the end's
+    kernels called in turn: the same results to the bit."""
+    (a, sa), (b, sb) = (_run_legacy(case, fused, monkeypatch) for fused in (False, True))
+    assert np.count_nonzero(sa["closed"]) > 0
+    for name in ("open_close_passes", "iterations", "solves", "closed", "sliding", "time"):
+        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
+    for name in ("x", "velocity", "stress"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    for name in ("state", "t_n", "t_s"):
+        np.testing.assert_array_equal(getattr(a.contacts, name), getattr(b.contacts, name))
+    assert a.contacts.history.keys() == b.contacts.history.keys()
+    for key, value in a.contacts.history.items():
+        np.testing.assert_array_equal(value, b.contacts.history[key], err_msg=key)
+
+
+def test_a_failed_legacy_step_in_one_call_says_why(monkeypatch):
+    """A singular system stops the one-call step on the pass the passes' kernel stops on,
+    with its reason."""
+    problem = _captured_problem(monkeypatch)
+    problem = replace(problem, block_k=np.zeros_like(problem.block_k))
+    out = []
+    for fused in (False, True):
+        monkeypatch.setattr(legacy, "LEGACY_DENSE_STEP", fused)
+        out.append(dda.solvers.LegacyPullBack().solve_step(replace(problem)))
+    for sol in out:
+        assert not sol.converged and sol.reason.startswith("singular system: "), sol.reason
+    assert out[0].open_close_passes == out[1].open_close_passes
+    assert out[0].iterations == out[1].iterations

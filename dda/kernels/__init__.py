@@ -23,7 +23,11 @@
 - :mod:`dda.kernels.dashpot`: each contact's impact dashpot, and its terms in legacy DDA's
   springs;
 - :mod:`dda.kernels.joints`: each contact's joint row and the deepest committed spring;
-- :func:`dda.kernels.assembly.newton_residuals`: a Newton iterate's out-of-balance vectors.
+- :func:`dda.kernels.assembly.newton_residuals`: a Newton iterate's out-of-balance vectors;
+- :mod:`dda.kernels.dense_passes` and :mod:`dda.kernels.dense_newton`: on a system solved
+  dense, every OPEN-CLOSE pass (with legacy DDA's pull-back and step end) and every Newton
+  iteration in one call each, built from the kernels above (their numbers agree with the
+  composed path's to round-off, not to the bit: numba's LAPACK is not numpy's).
 
 Two passes live beside the numpy code they replace, in :mod:`dda.contact`: the narrow phase
 after the broad phase (``detection._narrow_phase_kernel``) and the penetration guard

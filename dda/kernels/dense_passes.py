@@ -29,10 +29,10 @@ from numba import njit
 from dda.kernels.assembly import matrix_data, rhs_data
 from dda.kernels.dashpot import add_dashpot
 from dda.kernels.kinematics import pair_increments
-from dda.kernels.open_close import pass_judge, pass_loads
+from dda.kernels.open_close import _np_min, legacy_end, pass_judge, pass_loads, step_start
 
-__all__ = ["dense_passes", "single_switch", "solve_dense", "CONVERGED", "NOT_SETTLED", "SINGULAR",
-           "NOT_FINITE"]
+__all__ = ["dense_passes", "legacy_dense_step", "single_switch", "solve_dense", "CONVERGED",
+           "NOT_SETTLED", "SINGULAR", "NOT_FINITE"]
 
 CONVERGED, NOT_SETTLED, SINGULAR, NOT_FINITE = 0, 1, 2, 3
 
@@ -211,3 +211,60 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
         dgs_prev = dgs.copy()
         t_n_lag = next_lag
     return NOT_SETTLED, max_passes, d, state, gap, dgs, False
+
+
+@njit(cache=True)
+def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, block_k,
+                      block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
+                      pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free,
+                      e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference,
+                      release, kind, mu_s, mu_d, cohesion, face, state0, g_se0, slip0, sliding0,
+                      t_n0, gap_tol):
+    """Legacy DDA's whole step on a dense system (:class:`dda.solvers.LegacyPullBack`): the
+    pull-back and first states of :func:`dda.solvers.open_close._start`, every OPEN-CLOSE
+    pass (:func:`dense_passes`) and the step's end (:func:`dda.kernels.open_close.legacy_end`
+    and the contacts' spring forces), in one call.
+
+    The arguments are :func:`dense_passes`' but for the step's start: ``state0``, the
+    committed history ``g_se0, slip0, sliding0`` and normal forces ``t_n0`` instead of the
+    pulled-back history, the stick forces and the first pass's states; ``pn`` is the normal
+    penalty (the spring forces' stiffness), ``kn`` the judged normal force's.
+
+    Returns
+    -------
+    status, passes, d : as :func:`dense_passes`
+    state : (m,) int8 the settled states
+    t_n, t_s : (m,) the contacts' spring and shear forces at the step's end
+    g_se, slip, sliding : (m,) their history at the step's end
+    """
+    m = state0.shape[0]
+    # the pull-back of the excess friction, and the stick springs' forces from it
+    over, g_se, slip, sliding, t_stick = step_start(state0, kind, mu_s, mu_d, cohesion, face,
+                                                    g_se0, slip0, sliding0, t_n0, ps, length)
+    state = state0.copy()
+    held = np.zeros(m, dtype=np.bool_)
+    for i in range(m):
+        closed0 = state0[i] != 0
+        if closed0 and over[i]:
+            state[i] = 2  # over its strength: it starts sliding
+        # legacy's explicit rule spares the contacts that start the step sticking
+        held[i] = closed0 and state[i] == 1
+        if state[i] == 0 and gap0[i] <= gap_tol[i]:
+            state[i] = 1  # touching or penetrating: tried closed first
+    status, passes, d, state, gap, dgs, _ = dense_passes(
+        max_passes, True, band, rtol, floor, cycle_tension, relax_after, block_k, block_f,
+        d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
+        side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,
+        length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,
+        g_se, sliding, t_stick, state, held, gap_tol, t_n0)
+    t_n = np.zeros(m)
+    t_s = np.zeros(m)
+    if status != CONVERGED:
+        return status, passes, d, state, t_n, t_s, g_se, slip, sliding
+    judged = gap - release if has_dashpot else gap
+    t_n, t_s, g_se, slip, sliding = legacy_end(state, judged, dgs, kind, mu_s, mu_d, cohesion,
+                                               face, g_se, slip, sliding, kn, ps, length)
+    if has_dashpot:  # the contacts keep their spring's force, not the dashpot's
+        for i in range(m):
+            t_n[i] = _np_min(pn[i] * gap[i], 0.0) if state[i] != 0 else 0.0
+    return status, passes, d, state, t_n, t_s, g_se, slip, sliding

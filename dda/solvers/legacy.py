@@ -13,12 +13,26 @@ from __future__ import annotations
 import numpy as np
 
 from dda.contact.contacts import OPEN, ContactSet
+from dda.kernels.dense_passes import CONVERGED, legacy_dense_step
 from dda.kernels.open_close import as_float64, kernel_history, kernel_history_dict, legacy_end
-from dda.profiling import section
+from dda.profiling import count_solve, section
+from dda.solvers import open_close as oc_rules
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
-from dda.solvers.open_close import open_close
+from dda.solvers.open_close import (
+    dense_arguments,
+    dense_eligible,
+    dense_failure,
+    open_close,
+    round_off_gap,
+)
 
 __all__ = ["LegacyPullBack"]
+
+LEGACY_DENSE_STEP = True
+"""Whether a step whose OPEN-CLOSE takes the dense kernel
+(:func:`dda.solvers.open_close.dense_eligible`) runs its pull-back, passes and end in one
+kernel call (:func:`dda.kernels.dense_passes.legacy_dense_step`); False: the passes' kernel
+between the start's and the end's."""
 
 
 class LegacyPullBack(NonlinearSolver):
@@ -37,6 +51,8 @@ class LegacyPullBack(NonlinearSolver):
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element
+        if LEGACY_DENSE_STEP and dense_eligible(problem):
+            return _dense_step(problem)
         oc = open_close(problem, explicit=True)
         if not oc.converged:
             return StepSolution(None, None, False, oc.passes, oc.passes, oc.reason)
@@ -70,3 +86,25 @@ def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
     return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(),
                       el.spring_force(state != OPEN, gap, t_n), t_s,
                       kernel_history_dict(history, g_se, slip, sliding))
+
+
+def _dense_step(problem: StepProblem) -> StepSolution:
+    """:meth:`LegacyPullBack.solve_step` on a dense system with the built-in laws: the
+    pull-back, every OPEN-CLOSE pass and the step's end in one kernel call (the same
+    decisions and numbers as the passes' kernel between the start's and the end's). Its time
+    is the step profile's ``solve``."""
+    el = problem.element
+    c = el.contacts
+    rules = (oc_rules.NORMAL_FORCE_RTOL, oc_rules.NORMAL_FORCE_FLOOR, oc_rules.CYCLE_TENSION,
+             oc_rules.LAG_RELAX_AFTER)
+    with section("solve"):
+        status, passes, d, state, t_n, t_s, g_se, slip, sliding = legacy_dense_step(
+            problem.max_open_close, float(oc_rules.SETTLE_BAND), *rules,
+            *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
+            *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el))
+    count_solve(passes)
+    if status != CONVERGED:
+        return StepSolution(None, None, False, passes, passes, dense_failure(status, passes))
+    trial = ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s,
+                       kernel_history_dict(c.history, g_se, slip, sliding))
+    return StepSolution(d, trial, True, passes, passes)

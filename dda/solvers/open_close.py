@@ -254,6 +254,9 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     f64 = np.float64
     laws = el.kernel_laws
     g_se, _, sliding = kernel_history(history, m)
+    if dense_eligible(problem):
+        return _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
+                      (g_se, sliding, as_float64(t_stick)))
     pn, kn, ps, length, gap0, e_row, i_row, t_stick = (
         np.ascontiguousarray(a, dtype=f64) for a in (
             el.normal_penalty, el.judge_stiffness, el.shear_penalty, el.length, el.gap0,
@@ -262,12 +265,6 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     free = np.asarray(problem.free, dtype=np.bool_)
     state = np.asarray(state, dtype=np.int8)
     rules = (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
-    pattern = problem.pattern
-    if (DENSE_PASSES and PASS_LOG is None and pattern.n <= DENSE_LIMIT
-            and pattern.unknowns > 0):
-        return _dense(problem, pattern, el, history, state, held, gap_tol, settle_friction,
-                      band, rules, (bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length),
-                      (g_se, sliding, t_stick))
     t_n_lag = np.array(el.contacts.t_n, dtype=f64)
     dgs_prev = np.zeros(m)
     seen = {state.tobytes()}
@@ -302,13 +299,19 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
 
 
-def _dense(problem, pattern, el, history, state, held, gap_tol, settle_friction, band, rules,
-           contacts, start) -> OpenCloseResult:
-    """:func:`_compiled_passes` on a dense system: every pass in one kernel call
-    (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
-    round-off). ``contacts`` are the kernel's per-contact arrays (``bj`` to ``length``),
-    ``start`` the step's pulled-back ``g_se``, ``sliding`` and stick forces. Its time is the
-    step profile's ``solve``."""
+def dense_eligible(problem: StepProblem) -> bool:
+    """Whether the step's OPEN-CLOSE takes the dense kernel (:func:`_dense`): a dense system
+    with unknowns and contacts, the built-in laws, no pass log."""
+    el, pattern = problem.element, problem.pattern
+    return (DENSE_PASSES and PASS_LOG is None and pattern.n <= DENSE_LIMIT
+            and pattern.unknowns > 0 and len(el) > 0 and el.kernel_laws is not None)
+
+
+def dense_arguments(problem: StepProblem) -> tuple:
+    """The arguments of :func:`dda.kernels.dense_passes.dense_passes` from ``block_k`` to
+    ``face``: the step's blocks, the dense layout, legacy DDA's spring rows, the contacts'
+    linearization, penalties, impact dashpots and built-in laws."""
+    el, pattern = problem.element, problem.pattern
     m = len(el)
     f64 = np.float64
     if el.dashpot is None:
@@ -318,26 +321,44 @@ def _dense(problem, pattern, el, history, state, held, gap_tol, settle_friction,
         dashpot = (True, as_float64(el.dashpot), as_float64(el.dashpot_reference),
                    as_float64(el.release))
     keep = pattern.keep
-    with section("solve"):
-        status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
-            problem.max_open_close, bool(settle_friction), float(band), *rules,
-            np.ascontiguousarray(problem.block_k, dtype=f64),
+    return (np.ascontiguousarray(problem.block_k, dtype=f64),
             np.ascontiguousarray(problem.block_f, dtype=f64),
             np.ascontiguousarray(problem.d_known, dtype=f64), pattern.n, pattern.block_base,
             pattern.block_step, pattern.free_blocks, pattern.pair_base, pattern.pair_step,
             pattern.side_row, pattern.side_block,
             _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64), keep is not None,
-            el._spring_rows, SPRING_TERMS, *contacts, *dashpot, *el.kernel_laws, *start,
-            state, np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
+            el._spring_rows, SPRING_TERMS, np.asarray(el.bj, dtype=np.int64),
+            np.asarray(el.bk, dtype=np.int64), np.asarray(problem.free, dtype=np.bool_),
+            *(as_float64(a) for a in (el.e_row, el.i_row, el.gap0, el.normal_penalty,
+                                      el.shear_penalty, el.judge_stiffness, el.length)),
+            *dashpot, *el.kernel_laws)
+
+
+def dense_failure(status: int, passes: int) -> str:
+    """Why the dense kernel's OPEN-CLOSE stopped (``status`` other than CONVERGED)."""
+    if status == NOT_SETTLED:
+        return f"OPEN-CLOSE did not settle in {passes} passes"
+    return "singular system: " + ("Singular matrix" if status == SINGULAR
+                                  else "the step's system has no finite solution")
+
+
+def _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
+           start) -> OpenCloseResult:
+    """:func:`_compiled_passes` on a dense system: every pass in one kernel call
+    (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
+    round-off). ``start`` is the step's pulled-back ``g_se``, ``sliding`` and stick forces.
+    Its time is the step profile's ``solve``."""
+    rules = (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
+    with section("solve"):
+        status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
+            problem.max_open_close, bool(settle_friction), float(band), *rules,
+            *dense_arguments(problem), *start, np.asarray(state, dtype=np.int8),
+            np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
     count_solve(passes)
     if status == CONVERGED:
         return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
                                friction_settled)
-    if status == NOT_SETTLED:
-        return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
-    reason = "Singular matrix" if status == SINGULAR else (
-        "the step's system has no finite solution")
-    return OpenCloseResult(False, passes, f"singular system: {reason}")
+    return OpenCloseResult(False, passes, dense_failure(status, passes))
 
 
 _NO_KEEP = np.zeros(0, dtype=np.int64)
