@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import dda
-from dda.solvers import newton
+from dda.profiling import StepProfile
+from dda.solvers import newton, open_close
 from tests.conftest import stack_scene
 from tests.test_dense_passes import CASES
 
@@ -54,9 +55,11 @@ def _problem_and_start(monkeypatch, scene=None, step=3):
         return original(self, problem, d, max_iter)
 
     monkeypatch.setattr(newton.NewtonRaphson, "iterate", capture)
+    monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", False)  # the iterate is called apart
     sim = dda.Simulation(scene or stack_scene(3), dt=1e-3, solver=dda.solvers.NewtonRaphson())
     sim.run(step * 1e-3, progress=False)
     monkeypatch.setattr(newton.NewtonRaphson, "iterate", original)
+    monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", True)
     return captured[-1]
 
 
@@ -132,3 +135,75 @@ def test_the_dense_iterate_ran_and_counts_its_solves(monkeypatch):
     assert not np.array_equal(a.d, b.d)
     (_, sa, _), (_, sb, _) = (_run("3 x 3 stack", dense, monkeypatch) for dense in (False, True))
     np.testing.assert_array_equal(sa["solves"], sb["solves"])
+
+
+def _run_step(case, fused, monkeypatch):
+    monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", fused)
+    return _run(case, True, monkeypatch)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_newton_step_in_one_call_gives_the_two_kernels_bits(case, monkeypatch):
+    """The predictor and the iterations in one kernel call
+    (dda.kernels.dense_newton.newton_dense_step) are the predictor's and the iterations'
+    kernels called in turn: the same results to the bit."""
+    (a, sa, _), (b, sb, _) = (_run_step(case, fused, monkeypatch) for fused in (False, True))
+    for name in ("open_close_passes", "iterations", "solves", "closed", "sliding", "time"):
+        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
+    for name in ("x", "velocity", "stress"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+    for name in ("state", "t_n", "t_s"):
+        np.testing.assert_array_equal(getattr(a.contacts, name), getattr(b.contacts, name))
+    assert a.contacts.history.keys() == b.contacts.history.keys()
+    for key, value in a.contacts.history.items():
+        np.testing.assert_array_equal(value, b.contacts.history[key], err_msg=key)
+
+
+def _stack_step_problem(index):
+    """The StepProblem of the 3 x 3 stack's step ``index`` (Newton, dt 1e-3)."""
+    problems = []
+    solver = newton.NewtonRaphson()
+    original = solver.solve_step
+
+    def capture(problem):
+        problems.append(problem)
+        return original(problem)
+
+    solver.solve_step = capture
+    dda.Simulation(stack_scene(3), dt=1e-3, solver=solver).run((index + 1) * 1e-3,
+                                                                progress=False)
+    return problems[index]
+
+
+@pytest.mark.parametrize("max_iter, tol", [(25, 1e-9), (1, 1e-30)])
+def test_a_newton_step_in_one_call_settles_friction_when_it_must(max_iter, tol, monkeypatch):
+    """A step whose predictor leaves stick and slip unsettled (the 3 x 3 stack's fourth)
+    and whose first iterations do not converge (none allowed) settles stick and slip and
+    iterates again, in one call as in turn: the same passes, iterations, solves and outcome;
+    with one iteration allowed towards a tolerance below round-off both fail alike."""
+    problem = _stack_step_problem(3)
+    monkeypatch.setattr(newton, "PREDICTOR_ITERATIONS", 0)
+    out = []
+    for fused in (False, True):
+        monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", fused)
+        calls = []
+        original = open_close.open_close
+
+        def counted(*args, original=original, calls=calls, **kw):
+            calls.append(kw.get("settle_friction"))
+            return original(*args, **kw)
+
+        monkeypatch.setattr(newton, "open_close", counted)
+        profile = StepProfile()
+        with profile.active():
+            sol = newton.NewtonRaphson(tol, max_iter).solve_step(replace(problem))
+        out.append((sol, calls, profile.solves))
+    (a, calls, solves_a), (b, fused_calls, solves_b) = out
+    assert calls == [False, True] and fused_calls == []  # the composed path settled friction
+    assert a.converged == b.converged == (tol == 1e-9)
+    assert (a.open_close_passes, a.iterations, a.reason) == (
+        b.open_close_passes, b.iterations, b.reason)
+    assert solves_a == solves_b
+    assert a.residual_norms == b.residual_norms
+    if a.converged:
+        np.testing.assert_array_equal(a.d, b.d)

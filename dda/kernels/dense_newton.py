@@ -29,13 +29,13 @@ from numba import njit
 from dda.kernels.assembly import matrix_data, newton_residuals, rhs_data
 from dda.kernels.dense_passes import CONVERGED as SOLVED
 from dda.kernels.dense_passes import SINGULAR as SINGULAR_SOLVE
-from dda.kernels.dense_passes import solve_dense
+from dda.kernels.dense_passes import dense_passes, first_states, solve_dense
 from dda.kernels.kinematics import first_variations, pair_increments
-from dda.kernels.open_close import contact_response
+from dda.kernels.open_close import contact_response, step_start
 from dda.kernels.tangent import tangent_rows
 
-__all__ = ["dense_newton", "TANGENT_TERMS", "CONVERGED", "NOT_CONVERGED", "DIVERGED",
-           "SINGULAR", "NOT_FINITE"]
+__all__ = ["dense_newton", "newton_dense_step", "TANGENT_TERMS", "CONVERGED", "NOT_CONVERGED",
+           "DIVERGED", "SINGULAR", "NOT_FINITE"]
 
 CONVERGED, NOT_CONVERGED, DIVERGED, SINGULAR, NOT_FINITE = 0, 1, 2, 3, 4
 
@@ -219,3 +219,72 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
         d = d + step
     return (status, it, d, norms[:n_norms], scale, closed, slipping, spring, t_s, g_out,
             slip_out, sliding_out)
+
+
+@njit(cache=True)
+def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, max_iter,
+                      predictor_iterations, tol, round_off, halvings_allowed, cycle_length,
+                      block_k, block_f, d_known, n, block_base, block_step, free_blocks,
+                      pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms, bj,
+                      bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot,
+                      reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se0,
+                      slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0,
+                      shear0):
+    """The fully implicit method's whole step on a dense system
+    (:meth:`dda.solvers.NewtonRaphson.solve_step`) in one call: the pull-back and first
+    states, the predictor (OPEN-CLOSE with the open and closed states settled,
+    :func:`dda.kernels.dense_passes.dense_passes`), Newton's iterations from it
+    (:func:`dense_newton`, at most ``predictor_iterations`` when the predictor left stick and
+    slip unsettled) and, when those do not converge, the predictor with stick and slip settled
+    too and Newton again.
+
+    The arguments are :func:`dda.kernels.dense_passes.dense_passes`' from ``block_k`` to
+    ``face`` (:func:`dda.solvers.open_close.dense_arguments`), the committed contacts
+    (``state0``, history, ``t_n0``), the gaps' round-off, and :func:`dense_newton`'s own.
+
+    Returns
+    -------
+    oc_status, oc_passes : the last OPEN-CLOSE's status and passes
+    passes : every OPEN-CLOSE pass of the step
+    status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip, sliding : the last
+        Newton iterations' (:func:`dense_newton`; meaningless when ``oc_status`` failed)
+    solves : the linear solves of the step
+    """
+    m = state0.shape[0]
+    over, g_pb, _, sliding_pb, t_stick = step_start(state0, kind, mu_s, mu_d, cohesion, face,
+                                                    g_se0, slip0, sliding0, t_n0, ps, length)
+    state, held = first_states(state0, over, gap0, gap_tol, False)
+    passes = 0
+    solves = 0
+    oc_status, oc_passes = CONVERGED, 0
+    status, it, d = CONVERGED, 0, d_known.copy()
+    norms, scale = np.zeros(0), 1.0
+    closed, slipping = np.zeros(m, dtype=np.bool_), np.zeros(m, dtype=np.bool_)
+    spring, t_s = np.zeros(m), np.zeros(m)
+    g_se, slip, sliding = g_se0.copy(), slip0.copy(), sliding0.copy()
+    for settle_friction in (False, True):
+        oc_status, oc_passes, d, _, _, _, friction_settled = dense_passes(
+            max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after,
+            block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
+            pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row,
+            i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference, release, kind,
+            mu_s, mu_d, cohesion, face, g_pb, sliding_pb, t_stick, state, held, gap_tol, t_n0)
+        passes += oc_passes
+        solves += oc_passes
+        if oc_status != CONVERGED:
+            break
+        # from the looser predictor Newton gets a few iterations only
+        limit = max_iter if friction_settled else min(max_iter, predictor_iterations)
+        (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
+         sliding) = dense_newton(d, limit, tol, round_off, halvings_allowed, cycle_length,
+                                 block_k, block_f, free, rigid, n, block_base, block_step,
+                                 free_blocks, pair_base, pair_step, side_row, side_block, keep,
+                                 reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0, shear0, release,
+                                 has_dashpot, kn, pn, ps, length, kind, mu_s, mu_d, cohesion,
+                                 face, g_se0, slip0, sliding0)
+        # a solve for every accepted iterate but the last, and for the last when it failed
+        solves += norms.shape[0] - 1 + (1 if status >= SINGULAR else 0)
+        if status == CONVERGED or friction_settled:  # settling again would change nothing
+            break
+    return (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping,
+            spring, t_s, g_se, slip, sliding, solves)

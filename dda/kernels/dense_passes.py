@@ -31,8 +31,8 @@ from dda.kernels.dashpot import add_dashpot
 from dda.kernels.kinematics import pair_increments
 from dda.kernels.open_close import _np_min, legacy_end, pass_judge, pass_loads, step_start
 
-__all__ = ["dense_passes", "legacy_dense_step", "single_switch", "solve_dense", "CONVERGED",
-           "NOT_SETTLED", "SINGULAR", "NOT_FINITE"]
+__all__ = ["dense_passes", "first_states", "legacy_dense_step", "single_switch", "solve_dense",
+           "CONVERGED", "NOT_SETTLED", "SINGULAR", "NOT_FINITE"]
 
 CONVERGED, NOT_SETTLED, SINGULAR, NOT_FINITE = 0, 1, 2, 3
 
@@ -214,6 +214,26 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
 
 
 @njit(cache=True)
+def first_states(state0, over, gap0, gap_tol, explicit):
+    """The first pass's states and the contacts spared the friction check
+    (:func:`dda.solvers.open_close._start`): a closed contact ``over`` its strength after the
+    pull-back starts sliding; legacy DDA's explicit rule spares the closed contacts that start
+    sticking; an open one touching or penetrating (``gap0 <= gap_tol``) is tried closed
+    first. Returns ``(state, held)``."""
+    m = state0.shape[0]
+    state = state0.copy()
+    held = np.zeros(m, dtype=np.bool_)
+    for i in range(m):
+        closed0 = state0[i] != 0
+        if closed0 and over[i]:
+            state[i] = 2
+        held[i] = explicit and closed0 and state[i] == 1
+        if state[i] == 0 and gap0[i] <= gap_tol[i]:
+            state[i] = 1
+    return state, held
+
+
+@njit(cache=True)
 def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, block_k,
                       block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
                       pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free,
@@ -241,16 +261,7 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
     # the pull-back of the excess friction, and the stick springs' forces from it
     over, g_se, slip, sliding, t_stick = step_start(state0, kind, mu_s, mu_d, cohesion, face,
                                                     g_se0, slip0, sliding0, t_n0, ps, length)
-    state = state0.copy()
-    held = np.zeros(m, dtype=np.bool_)
-    for i in range(m):
-        closed0 = state0[i] != 0
-        if closed0 and over[i]:
-            state[i] = 2  # over its strength: it starts sliding
-        # legacy's explicit rule spares the contacts that start the step sticking
-        held[i] = closed0 and state[i] == 1
-        if state[i] == 0 and gap0[i] <= gap_tol[i]:
-            state[i] = 1  # touching or penetrating: tried closed first
+    state, held = first_states(state0, over, gap0, gap_tol, True)
     status, passes, d, state, gap, dgs, _ = dense_passes(
         max_passes, True, band, rtol, floor, cycle_tension, relax_after, block_k, block_f,
         d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,

@@ -36,12 +36,25 @@ from dda._checks import finite_number
 from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.kernels.assembly import newton_residuals
 from dda.kernels.dense_newton import CONVERGED as DENSE_CONVERGED
-from dda.kernels.dense_newton import DIVERGED, NOT_CONVERGED, SINGULAR, dense_newton
+from dda.kernels.dense_newton import (
+    DIVERGED,
+    NOT_CONVERGED,
+    SINGULAR,
+    dense_newton,
+    newton_dense_step,
+)
 from dda.kernels.open_close import as_float64, kernel_history, kernel_history_dict
 from dda.profiling import count_solve, section
+from dda.solvers import open_close as oc_rules
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve, assemble_vector
-from dda.solvers.open_close import open_close
+from dda.solvers.open_close import (
+    dense_arguments,
+    dense_eligible,
+    dense_failure,
+    open_close,
+    round_off_gap,
+)
 
 __all__ = ["NewtonRaphson"]
 
@@ -100,6 +113,8 @@ class NewtonRaphson(NonlinearSolver):
         return f"NewtonRaphson(tol={self.tol:g}, max_iter={self.max_iter})"
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
+        if DENSE_NEWTON and NEWTON_DENSE_STEP and dense_eligible(problem):
+            return self._dense_step(problem)
         # the predictor: OPEN-CLOSE with the open and closed states settled; only when Newton
         # does not converge from it are the stick and slip states settled too
         passes = 0
@@ -222,27 +237,69 @@ class NewtonRaphson(NonlinearSolver):
                 slip, sliding)
         # a solve for every accepted iterate but the last, and for the last when it failed
         count_solve(len(norms) - 1 + (status >= SINGULAR))
-        norms = norms.tolist()
-        if status == DENSE_CONVERGED:
-            state = np.where(closed, np.where(slipping, SLIP, STICK), OPEN).astype(np.int8)
-            history = kernel_history_dict(el.contacts.history, g_se, slip, sliding)
-            trial = el.trial_contacts(state, spring, t_s, history)
-            return StepSolution(d, trial, True, 0, it, "", norms)
-        if status == DIVERGED:
-            reason = "Newton-Raphson diverged (non-finite residual)"
-        elif status == NOT_CONVERGED:
-            reason = (f"Newton-Raphson did not converge in {max_iter} iterations "
-                      f"(|R| = {norms[-1]:.3g}, {norms[-1] / scale:.3g} of the forces)")
-        else:
-            reason = "singular tangent: " + ("Singular matrix" if status == SINGULAR
-                                             else "the step's system has no finite solution")
-        return StepSolution(None, None, False, 0, it, reason, norms)
+        return _solution(el, status, it, d, norms, scale, closed, slipping, spring, t_s,
+                         (g_se, slip, sliding))
 
+    def _dense_step(self, problem: StepProblem) -> StepSolution:
+        """:meth:`solve_step` on a dense system with the built-in laws: the predictor's start
+        and passes and Newton's iterations in one kernel call
+        (:func:`dda.kernels.dense_newton.newton_dense_step`; the same decisions and numbers
+        as :func:`dda.solvers.open_close.open_close`'s dense kernel and :meth:`_dense` in
+        turn). Its time is the step profile's ``solve``."""
+        el = problem.element
+        c, g = el.contacts, el.geometry
+        rigid = problem.rigid if problem.rigid is not None else np.zeros(len(problem.free))
+        rules = (oc_rules.NORMAL_FORCE_RTOL, oc_rules.NORMAL_FORCE_FLOOR,
+                 oc_rules.CYCLE_TENSION, oc_rules.LAG_RELAX_AFTER)
+        with section("solve"):
+            (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping,
+             spring, t_s, g_se, slip, sliding, solves) = newton_dense_step(
+                problem.max_open_close, *rules, self.max_iter, PREDICTOR_ITERATIONS,
+                float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS, CYCLE_LENGTH,
+                *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
+                *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el),
+                np.asarray(rigid, dtype=np.bool_), *(as_float64(a) for a in (
+                    g.p1, g.p2, g.p3, *el.maps, c.xi0, el.shear0)))
+        count_solve(solves)
+        if oc_status != DENSE_CONVERGED:
+            return StepSolution(None, None, False, passes, 0,
+                                dense_failure(oc_status, oc_passes))
+        sol = _solution(el, status, it, d, norms, scale, closed, slipping, spring, t_s,
+                        (g_se, slip, sliding))
+        sol.open_close_passes = passes
+        return sol
+
+
+def _solution(el, status, it, d, norms, scale, closed, slipping, spring, t_s,
+              history) -> StepSolution:
+    """The StepSolution of a dense kernel's Newton iterations (:func:`dense_newton`'s
+    results): the trial contacts when converged, else why not."""
+    norms = norms.tolist()
+    if status == DENSE_CONVERGED:
+        state = np.where(closed, np.where(slipping, SLIP, STICK), OPEN).astype(np.int8)
+        history = kernel_history_dict(el.contacts.history, *history)
+        trial = el.trial_contacts(state, spring, t_s, history)
+        return StepSolution(d, trial, True, 0, it, "", norms)
+    if status == DIVERGED:
+        reason = "Newton-Raphson diverged (non-finite residual)"
+    elif status == NOT_CONVERGED:
+        reason = (f"Newton-Raphson did not converge in {it} iterations "
+                  f"(|R| = {norms[-1]:.3g}, {norms[-1] / scale:.3g} of the forces)")
+    else:
+        reason = "singular tangent: " + ("Singular matrix" if status == SINGULAR
+                                         else "the step's system has no finite solution")
+    return StepSolution(None, None, False, 0, it, reason, norms)
 
 DENSE_NEWTON = True
 """Whether a dense system's iterations (up to ``DENSE_LIMIT`` unknowns, the built-in laws)
 run in one kernel call (:func:`dda.kernels.dense_newton.dense_newton`); False: the composed
 iterate, every scene."""
+
+NEWTON_DENSE_STEP = True
+"""Whether a step whose OPEN-CLOSE takes the dense kernel
+(:func:`dda.solvers.open_close.dense_eligible`, with ``DENSE_NEWTON``) runs its predictor and
+iterations in one kernel call (:func:`dda.kernels.dense_newton.newton_dense_step`); False:
+the predictor's kernel and the iterations' kernel in turn."""
 
 _NO_KEEP = np.zeros(0, dtype=np.int64)
 
