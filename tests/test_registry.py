@@ -25,7 +25,7 @@ def test_keywords_come_from_the_signature():
         "jrc", "jcs", "phi_r", "mobilized", "slip_at_peak", "block_size", "dilation",
         "max_angle"}
     assert registry.parameters(LegacyPullBack) == ()
-    assert registry.parameters(NewtonRaphson) == ("tol", "max_iter")
+    assert registry.parameters(NewtonRaphson) == ("tol", "max_iter", "unsettled_predictor")
     law = registry.make_law("barton", jrc=10.0, jcs=50e6, phi_r=28.0, dilation=True)
     assert isinstance(law, BartonBandis) and law.dilation
     solver = registry.make_solver("newton", tol=1e-8)

@@ -73,7 +73,8 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     [simulation]
     dt = 1e-3                             # or "auto" (dda.auto_settings; dda info says why)
     duration = 1.0
-    solver = "newton"                     # or "legacy" (see below); tol, max_iter: newton's
+    solver = "newton"                     # or "legacy" (see below); tol, max_iter,
+                                          # unsettled_predictor: newton's
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
                                           # record_every, max_displacement_ratio,
                                           # penetration_tolerance

@@ -28,8 +28,8 @@ from numba import njit
 
 from dda.kernels.assembly import matrix_data, newton_residuals, rhs_data
 from dda.kernels.dense_passes import CONVERGED as SOLVED
+from dda.kernels.dense_passes import NOT_SETTLED, dense_passes, first_states, solve_dense
 from dda.kernels.dense_passes import SINGULAR as SINGULAR_SOLVE
-from dda.kernels.dense_passes import dense_passes, first_states, solve_dense
 from dda.kernels.kinematics import first_variations, pair_increments
 from dda.kernels.open_close import contact_response, step_start
 from dda.kernels.tangent import tangent_rows
@@ -222,13 +222,13 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
 
 
 @njit(cache=True)
-def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, max_iter,
+def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, unsettled, max_iter,
                       predictor_iterations, tol, round_off, halvings_allowed, cycle_length,
                       block_k, block_f, d_known, n, block_base, block_step, free_blocks,
-                      pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms, bj,
-                      bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot,
-                      reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se0,
-                      slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0,
+                      pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms,
+                      bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot,
+                      dashpot, reference, release, kind, mu_s, mu_d, cohesion, face, state0,
+                      g_se0, slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0,
                       shear0):
     """The fully implicit method's whole step on a dense system
     (:meth:`dda.solvers.NewtonRaphson.solve_step`) in one call: the pull-back and first
@@ -236,7 +236,9 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, max_i
     :func:`dda.kernels.dense_passes.dense_passes`), Newton's iterations from it
     (:func:`dense_newton`, at most ``predictor_iterations`` when the predictor left stick and
     slip unsettled) and, when those do not converge, the predictor with stick and slip settled
-    too and Newton again.
+    too and Newton again. With ``unsettled``, an OPEN-CLOSE that does not settle in its
+    passes is a predictor all the same (its last pass's increments, Newton's whole
+    ``max_iter``; ``NewtonRaphson(unsettled_predictor=True)``).
 
     The arguments are :func:`dda.kernels.dense_passes.dense_passes`' from ``block_k`` to
     ``face`` (:func:`dda.solvers.open_close.dense_arguments`), the committed contacts
@@ -244,7 +246,8 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, max_i
 
     Returns
     -------
-    oc_status, oc_passes : the last OPEN-CLOSE's status and passes
+    oc_status, oc_passes : the last OPEN-CLOSE's status and passes (NOT_SETTLED with
+        ``unsettled``: Newton's results below are from its last pass)
     passes : every OPEN-CLOSE pass of the step
     status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip, sliding : the last
         Newton iterations' (:func:`dense_newton`; meaningless when ``oc_status`` failed)
@@ -271,10 +274,13 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, max_i
             mu_s, mu_d, cohesion, face, g_pb, sliding_pb, t_stick, state, held, gap_tol, t_n0)
         passes += oc_passes
         solves += oc_passes
-        if oc_status != CONVERGED:
+        if oc_status != CONVERGED and not (oc_status == NOT_SETTLED and unsettled):
             break
-        # from the looser predictor Newton gets a few iterations only
+        # from the looser predictor Newton gets a few iterations only; from one that did not
+        # settle, all (settling stick and slip would not settle either)
         limit = max_iter if friction_settled else min(max_iter, predictor_iterations)
+        if oc_status == NOT_SETTLED:
+            limit = max_iter
         (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
          sliding) = dense_newton(d, limit, tol, round_off, halvings_allowed, cycle_length,
                                  block_k, block_f, free, rigid, n, block_base, block_step,
@@ -284,7 +290,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, max_i
                                  face, g_se0, slip0, sliding0)
         # a solve for every accepted iterate but the last, and for the last when it failed
         solves += norms.shape[0] - 1 + (1 if status >= SINGULAR else 0)
-        if status == CONVERGED or friction_settled:  # settling again would change nothing
-            break
+        if status == CONVERGED or friction_settled or oc_status != CONVERGED:
+            break  # settling again would change nothing
     return (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping,
             spring, t_s, g_se, slip, sliding, solves)

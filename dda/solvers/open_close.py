@@ -147,6 +147,8 @@ class OpenCloseResult:
 
     ``history`` is the committed history after the pull-back; ``gap`` and ``dgs`` are the
     normal gap and the shear increment of the last pass, linearized at the step's start.
+    An iteration that did not settle in its passes keeps the last pass's increments in ``d``
+    (the fully implicit method iterates from them); a singular one has none.
     """
 
     converged: bool
@@ -230,7 +232,7 @@ def open_close(problem: StepProblem, explicit: bool,
         seen.add(new_state.tobytes())
         t_n_lag, lag_error = _next_lag(t_n, t_n_lag, lag_error, passes)
         state, dgs_prev = new_state, dgs
-    return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
+    return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes", d)
 
 
 def _solve_pass(problem, k, f):
@@ -296,7 +298,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
             new_state = _single_switch(state, new_state, judged)
         seen.add(new_state.tobytes())
         state, dgs_prev, t_n_lag = new_state, dgs, next_lag
-    return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes")
+    return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes", d)
 
 
 def dense_eligible(problem: StepProblem) -> bool:
@@ -358,7 +360,10 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
     if status == CONVERGED:
         return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
                                friction_settled)
-    return OpenCloseResult(False, passes, dense_failure(status, passes))
+    # the last pass's increments when it did not settle (the fully implicit method iterates
+    # from them)
+    return OpenCloseResult(False, passes, dense_failure(status, passes),
+                           d if status == NOT_SETTLED else None)
 
 
 _NO_KEEP = np.zeros(0, dtype=np.int64)
