@@ -35,7 +35,7 @@ Writes:
 - ``OUT/rock_slope_*.vtu`` and ``OUT/rock_slope.pvd``: the last run (``face``), every 20 ms.
 
 Run:  python examples/rock_slope.py [--out DIR] [--dt S] [--hold S] [--joints A,B] [--full]
-      (--full: dt 1e-4 s as in the paper, about 10 minutes)
+      (--full: dt 1e-4 s as in the paper, about 2 minutes)
 """
 
 from __future__ import annotations
