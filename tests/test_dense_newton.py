@@ -12,7 +12,7 @@ import dda
 from dda.profiling import StepProfile
 from dda.solvers import newton, open_close
 from tests.conftest import stack_scene
-from tests.test_dense_passes import CASES
+from tests.test_dense_passes import CASES, assert_close_runs, assert_same_run
 
 
 def _run(case, dense, monkeypatch):
@@ -27,21 +27,7 @@ def _run(case, dense, monkeypatch):
 def test_one_kernel_takes_the_composed_iterations_decisions(case, monkeypatch):
     (a, sa, dt), (b, sb, _) = (_run(case, dense, monkeypatch) for dense in (False, True))
     assert np.count_nonzero(sa["closed"]) > 0 and np.sum(sa["iterations"]) > 0
-    for name in ("open_close_passes", "closed", "sliding", "time"):
-        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
-    # where a residual sits at the round-off floor of the convergence test one more or one
-    # fewer iteration may be taken (tests/test_dense_passes.py)
-    assert abs(int(np.sum(sa["iterations"])) - int(np.sum(sb["iterations"]))) <= 2
-    assert abs(int(np.sum(sa["solves"])) - int(np.sum(sb["solves"]))) <= 2
-    size = np.ptp(a.x, axis=0).max()
-    np.testing.assert_allclose(b.x, a.x, rtol=0.0, atol=1e-11 * size)
-    np.testing.assert_allclose(b.velocity, a.velocity, rtol=0.0, atol=1e-9 * size / dt)
-    for name in ("t_n", "t_s"):
-        x, y = getattr(a.contacts, name), getattr(b.contacts, name)
-        np.testing.assert_allclose(y, x, rtol=0.0, atol=1e-8 * np.abs(a.contacts.t_n).max())
-    for name in a.contacts.history:  # lengths (the elastic shear gap, the slip) and flags
-        x, y = a.contacts.history[name], b.contacts.history[name]
-        np.testing.assert_allclose(y, x, rtol=0.0, atol=1e-11 * size, err_msg=name)
+    assert_close_runs(a, sa, b, sb, dt)
 
 
 def _problem_and_start(monkeypatch, scene=None, step=3):
@@ -148,15 +134,7 @@ def test_newton_step_in_one_call_gives_the_two_kernels_bits(case, monkeypatch):
     (dda.kernels.dense_newton.newton_dense_step) are the predictor's and the iterations'
     kernels called in turn: the same results to the bit."""
     (a, sa, _), (b, sb, _) = (_run_step(case, fused, monkeypatch) for fused in (False, True))
-    for name in ("open_close_passes", "iterations", "solves", "closed", "sliding", "time"):
-        np.testing.assert_array_equal(sa[name], sb[name], err_msg=name)
-    for name in ("x", "velocity", "stress"):
-        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
-    for name in ("state", "t_n", "t_s"):
-        np.testing.assert_array_equal(getattr(a.contacts, name), getattr(b.contacts, name))
-    assert a.contacts.history.keys() == b.contacts.history.keys()
-    for key, value in a.contacts.history.items():
-        np.testing.assert_array_equal(value, b.contacts.history[key], err_msg=key)
+    assert_same_run(a, sa, b, sb)
 
 
 def _stack_step_problem(index):

@@ -3,7 +3,6 @@ did not settle instead of cutting the step."""
 
 from __future__ import annotations
 
-import textwrap
 from dataclasses import replace
 
 import numpy as np
@@ -14,6 +13,7 @@ from dda.io.scene_file import load_scene
 from dda.solvers import NewtonRaphson, newton
 from dda.solvers.open_close import open_close
 from tests.stability import scenes as S
+from tests.test_cli_and_pictures import SCENE
 
 
 def _stopper():
@@ -112,34 +112,7 @@ def test_the_setting_is_a_bool_and_shows_in_the_repr():
 
 
 def test_a_scene_file_sets_it(tmp_path):
-    text = textwrap.dedent("""
-        [materials.rock]
-        young = 1e9
-        poisson = 0.25
-        density = 2500.0
-
-        [joints.default]
-        normal_penalty = 1e9
-        shear_penalty = 1e9
-        friction = { law = "coulomb", phi = 30.0 }
-
-        [[blocks]]
-        name = "base"
-        material = "rock"
-        vertices = [[0, 0], [4, 0], [4, 1], [0, 1]]
-        fixed = true
-
-        [[blocks]]
-        name = "top"
-        material = "rock"
-        vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]
-
-        [simulation]
-        dt = 1e-3
-        duration = 0.01
-        solver = "newton"
-        unsettled_predictor = true
-    """)
+    text = SCENE.replace('solver = "legacy"', 'solver = "newton"\nunsettled_predictor = true')
     path = tmp_path / "scene.toml"
     path.write_text(text)
     solver = load_scene(path).solver

@@ -28,7 +28,13 @@ from numba import njit
 
 from dda.kernels.assembly import matrix_data, newton_residuals, rhs_data
 from dda.kernels.dense_passes import CONVERGED as SOLVED
-from dda.kernels.dense_passes import NOT_SETTLED, dense_passes, first_states, solve_dense
+from dda.kernels.dense_passes import (
+    NOT_SETTLED,
+    dense_passes,
+    first_states,
+    rows_equal,
+    solve_dense,
+)
 from dda.kernels.dense_passes import SINGULAR as SINGULAR_SOLVE
 from dda.kernels.kinematics import first_variations, pair_increments
 from dda.kernels.open_close import contact_response, step_start
@@ -83,13 +89,7 @@ def _at_round_off(norm, norms, count, floor):
 def _cycle_back(pattern, patterns, count, cycle_length):
     """How many accepted iterates back (2 to ``cycle_length``) ``pattern`` was, or 0."""
     for back in range(2, min(cycle_length, count) + 1):
-        row = count - back
-        same = True
-        for i in range(pattern.shape[0]):
-            if patterns[row, i] != pattern[i]:
-                same = False
-                break
-        if same:
+        if rows_equal(patterns[count - back], pattern):
             return back
     return 0
 

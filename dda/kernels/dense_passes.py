@@ -31,8 +31,8 @@ from dda.kernels.dashpot import add_dashpot
 from dda.kernels.kinematics import pair_increments
 from dda.kernels.open_close import _np_min, legacy_end, pass_judge, pass_loads, step_start
 
-__all__ = ["dense_passes", "first_states", "legacy_dense_step", "single_switch", "solve_dense",
-           "CONVERGED", "NOT_SETTLED", "SINGULAR", "NOT_FINITE"]
+__all__ = ["dense_passes", "first_states", "legacy_dense_step", "rows_equal", "single_switch",
+           "solve_dense", "CONVERGED", "NOT_SETTLED", "SINGULAR", "NOT_FINITE"]
 
 CONVERGED, NOT_SETTLED, SINGULAR, NOT_FINITE = 0, 1, 2, 3
 
@@ -64,15 +64,19 @@ def solve_dense(data, n, rhs, keep, reduced):
 
 
 @njit(cache=True)
+def rows_equal(a, b):
+    """Whether the int8 rows ``a`` and ``b`` (one contact state each) are the same."""
+    for i in range(a.shape[0]):
+        if a[i] != b[i]:
+            return False
+    return True
+
+
+@njit(cache=True)
 def _seen(seen, count, state):
     """Whether ``state`` is one of the first ``count`` rows of ``seen``."""
     for r in range(count):
-        same = True
-        for i in range(state.shape[0]):
-            if seen[r, i] != state[i]:
-                same = False
-                break
-        if same:
+        if rows_equal(seen[r], state):
             return True
     return False
 
