@@ -3,6 +3,7 @@ did not settle instead of cutting the step."""
 
 from __future__ import annotations
 
+import pickle
 from dataclasses import replace
 
 import numpy as np
@@ -109,6 +110,17 @@ def test_the_setting_is_a_bool_and_shows_in_the_repr():
     assert repr(NewtonRaphson()) == "NewtonRaphson(tol=1e-09, max_iter=25)"
     with pytest.raises(TypeError, match="unsettled_predictor must be True or False, got 1"):
         NewtonRaphson(unsettled_predictor=1)
+
+
+def test_a_solver_pickled_before_the_setting_existed_has_it_off():
+    """A checkpoint of the same layout written before the setting existed holds a
+    NewtonRaphson without the attribute: it reads as the default."""
+    old = NewtonRaphson()
+    del old.__dict__["unsettled_predictor"]
+    back = pickle.loads(pickle.dumps(old))
+    assert back.unsettled_predictor is False
+    sim, st = _run(back, 0.02)
+    assert len(st) > 0
 
 
 def test_a_scene_file_sets_it(tmp_path):

@@ -118,6 +118,8 @@ class NewtonRaphson(NonlinearSolver):
     """
 
     name = "newton"
+    # the default also for a solver pickled before the setting existed (a checkpoint)
+    unsettled_predictor = False
 
     def __init__(self, tol: float = 1e-9, max_iter: int = 25,
                  unsettled_predictor: bool = False):
