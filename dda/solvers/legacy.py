@@ -23,6 +23,7 @@ from dda.solvers.open_close import (
     dense_eligible,
     dense_failure,
     open_close,
+    pass_rules,
     round_off_gap,
 )
 
@@ -95,11 +96,9 @@ def _dense_step(problem: StepProblem) -> StepSolution:
     is the step profile's ``solve``."""
     el = problem.element
     c = el.contacts
-    rules = (oc_rules.NORMAL_FORCE_RTOL, oc_rules.NORMAL_FORCE_FLOOR, oc_rules.CYCLE_TENSION,
-             oc_rules.LAG_RELAX_AFTER)
     with section("solve"):
         status, passes, d, state, t_n, t_s, g_se, slip, sliding = legacy_dense_step(
-            problem.max_open_close, float(oc_rules.SETTLE_BAND), *rules,
+            problem.max_open_close, float(oc_rules.SETTLE_BAND), *pass_rules(),
             *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
             *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el))
     count_solve(passes)

@@ -46,14 +46,15 @@ from dda.kernels.dense_newton import (
 from dda.kernels.dense_passes import NOT_SETTLED
 from dda.kernels.open_close import as_float64, kernel_history, kernel_history_dict
 from dda.profiling import count_solve, section
-from dda.solvers import open_close as oc_rules
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve, assemble_vector
 from dda.solvers.open_close import (
     dense_arguments,
     dense_eligible,
     dense_failure,
+    dense_layout,
     open_close,
+    pass_rules,
     round_off_gap,
 )
 
@@ -248,7 +249,6 @@ class NewtonRaphson(NonlinearSolver):
         numbers to round-off). Its time is the step profile's ``solve``."""
         el, pattern = problem.element, problem.pattern
         g = el.geometry
-        keep = pattern.keep
         rigid = problem.rigid if problem.rigid is not None else np.zeros(len(problem.free))
         dashpot = el.dashpot is not None
         g_se, slip, sliding = kernel_history(el.contacts.history, len(el))
@@ -258,10 +258,7 @@ class NewtonRaphson(NonlinearSolver):
                 as_float64(d), max_iter, float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
                 CYCLE_LENGTH, as_float64(problem.block_k), as_float64(problem.block_f),
                 np.asarray(problem.free, dtype=np.bool_), np.asarray(rigid, dtype=np.bool_),
-                pattern.n, pattern.block_base, pattern.block_step, pattern.free_blocks,
-                pattern.pair_base, pattern.pair_step, pattern.side_row, pattern.side_block,
-                _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64),
-                keep is not None, np.asarray(el.bj, dtype=np.int64),
+                *dense_layout(pattern), np.asarray(el.bj, dtype=np.int64),
                 np.asarray(el.bk, dtype=np.int64), *(as_float64(a) for a in (
                     g.p1, g.p2, g.p3, *el.maps, el.contacts.xi0, el.shear0, el.release)),
                 dashpot, as_float64(el.judge_stiffness), as_float64(el.normal_penalty),
@@ -281,12 +278,10 @@ class NewtonRaphson(NonlinearSolver):
         el = problem.element
         c, g = el.contacts, el.geometry
         rigid = problem.rigid if problem.rigid is not None else np.zeros(len(problem.free))
-        rules = (oc_rules.NORMAL_FORCE_RTOL, oc_rules.NORMAL_FORCE_FLOOR,
-                 oc_rules.CYCLE_TENSION, oc_rules.LAG_RELAX_AFTER)
         with section("solve"):
             (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping,
              spring, t_s, g_se, slip, sliding, solves) = newton_dense_step(
-                problem.max_open_close, *rules, self.unsettled_predictor, self.max_iter,
+                problem.max_open_close, *pass_rules(), self.unsettled_predictor, self.max_iter,
                 PREDICTOR_ITERATIONS,
                 float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS, CYCLE_LENGTH,
                 *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
@@ -338,7 +333,6 @@ NEWTON_DENSE_STEP = True
 iterations in one kernel call (:func:`dda.kernels.dense_newton.newton_dense_step`); False:
 the predictor's kernel and the iterations' kernel in turn."""
 
-_NO_KEEP = np.zeros(0, dtype=np.int64)
 
 RESIDUAL_KERNEL = True
 """Whether an iterate's out-of-balance vectors come from one compiled pass

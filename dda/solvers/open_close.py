@@ -266,7 +266,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     bj, bk = (np.asarray(b, dtype=np.int64) for b in (el.bj, el.bk))
     free = np.asarray(problem.free, dtype=np.bool_)
     state = np.asarray(state, dtype=np.int8)
-    rules = (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
+    rules = pass_rules()
     t_n_lag = np.array(el.contacts.t_n, dtype=f64)
     dgs_prev = np.zeros(m)
     seen = {state.tobytes()}
@@ -322,18 +322,30 @@ def dense_arguments(problem: StepProblem) -> tuple:
     else:
         dashpot = (True, as_float64(el.dashpot), as_float64(el.dashpot_reference),
                    as_float64(el.release))
-    keep = pattern.keep
     return (np.ascontiguousarray(problem.block_k, dtype=f64),
             np.ascontiguousarray(problem.block_f, dtype=f64),
-            np.ascontiguousarray(problem.d_known, dtype=f64), pattern.n, pattern.block_base,
-            pattern.block_step, pattern.free_blocks, pattern.pair_base, pattern.pair_step,
-            pattern.side_row, pattern.side_block,
-            _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64), keep is not None,
+            np.ascontiguousarray(problem.d_known, dtype=f64), *dense_layout(pattern),
             el._spring_rows, SPRING_TERMS, np.asarray(el.bj, dtype=np.int64),
             np.asarray(el.bk, dtype=np.int64), np.asarray(problem.free, dtype=np.bool_),
             *(as_float64(a) for a in (el.e_row, el.i_row, el.gap0, el.normal_penalty,
                                       el.shear_penalty, el.judge_stiffness, el.length)),
             *dashpot, *el.kernel_laws)
+
+
+def dense_layout(pattern) -> tuple:
+    """The dense kernels' layout arguments of a :class:`dda.solvers.linear.SystemPattern`:
+    ``n``, where the blocks' and the contacts' 6 x 6 blocks go, the contacts' right-hand side
+    rows, and the unknowns solved for (``keep``, ``reduced``)."""
+    keep = pattern.keep
+    return (pattern.n, pattern.block_base, pattern.block_step, pattern.free_blocks,
+            pattern.pair_base, pattern.pair_step, pattern.side_row, pattern.side_block,
+            _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64), keep is not None)
+
+
+def pass_rules() -> tuple:
+    """The passes' rules as the kernels take them: ``NORMAL_FORCE_RTOL``,
+    ``NORMAL_FORCE_FLOOR``, ``CYCLE_TENSION``, ``LAG_RELAX_AFTER`` (read at each call)."""
+    return (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
 
 
 def dense_failure(status: int, passes: int) -> str:
@@ -350,10 +362,9 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
     (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
     round-off). ``start`` is the step's pulled-back ``g_se``, ``sliding`` and stick forces.
     Its time is the step profile's ``solve``."""
-    rules = (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
     with section("solve"):
         status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
-            problem.max_open_close, bool(settle_friction), float(band), *rules,
+            problem.max_open_close, bool(settle_friction), float(band), *pass_rules(),
             *dense_arguments(problem), *start, np.asarray(state, dtype=np.int8),
             np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
     count_solve(passes)
