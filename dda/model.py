@@ -38,6 +38,9 @@ class JointTable:
     history_fields : every law's history fields and their initial values
     damping_ratio : (n_joints,) zeta of each joint's impact dashpot
         (:mod:`dda.contact.dashpot`), or None when no joint has one
+    shear_damping_ratio : (n_joints,) zeta of each joint's shear dashpot (its
+        ``damping_ratio`` where ``JointMaterial.shear_dashpot``, else 0), or None when no
+        joint has one
     """
 
     default: int
@@ -49,6 +52,7 @@ class JointTable:
     laws: tuple[FrictionLaw, ...]
     history_fields: dict
     damping_ratio: np.ndarray | None = None  # None also in checkpoints of earlier versions
+    shear_damping_ratio: np.ndarray | None = None  # the same
 
     @classmethod
     def from_scene(cls, scene: Scene, n_blocks: int) -> JointTable:
@@ -74,12 +78,14 @@ class JointTable:
         for law in laws:
             fields.update(law.history_fields())
         zeta = np.array([damping_ratio(j.restitution) for j in joints], dtype=float)
+        zeta_s = np.where([getattr(j, "shear_dashpot", False) for j in joints], zeta, 0.0)
         # "auto" penalties are NaN until the simulation chooses them (:meth:`with_penalties`)
         return cls(default, keys[order], ids[order],
                    np.array([_penalty(j.normal_penalty) for j in joints], dtype=float),
                    np.array([_penalty(j.shear_penalty) for j in joints], dtype=float),
                    np.array([law_of[id(j.friction)] for j in joints], dtype=np.int64),
-                   tuple(laws), fields, zeta if np.any(zeta > 0.0) else None)
+                   tuple(laws), fields, zeta if np.any(zeta > 0.0) else None,
+                   zeta_s if np.any(zeta_s > 0.0) else None)
 
     @property
     def auto(self) -> bool:

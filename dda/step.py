@@ -24,7 +24,12 @@ import numpy as np
 
 from dda import geometry
 from dda.contact.contacts import OPEN, ContactSet, carry_over
-from dda.contact.dashpot import contact_mass, dashpot_stiffness
+from dda.contact.dashpot import (
+    contact_mass,
+    dashpot_stiffness,
+    shear_dashpot_end,
+    shear_dashpot_start,
+)
 from dda.contact.detection import (
     CandidateContacts,
     bounding_boxes,
@@ -186,6 +191,8 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
                           max_open_close=settings.max_open_close, rigid=model.rigid,
                           factors=_factors(solver))
     sol = solver.solve_step(problem)
+    if element.shear_dashpot is not None and sol.contacts is not None:
+        shear_dashpot_end(sol.contacts, *element.shear_dashpot)
     costs = (problem.pattern.unknowns, found.n_pairs)
     if not sol.converged:
         return None, StepReport.of(sol, *costs)
@@ -315,16 +322,39 @@ def _element(model, state, found: _Detected, ints, dt: float) -> ContactElement:
         else:
             element.dashpot = dashpot_stiffness(zeta[joint], pn, _contact_mass(
                 model, ints, contacts, element.geometry), dt)
+    zeta_s = getattr(model.joints, "shear_damping_ratio", None)
+    if zeta_s is not None and dt > 0.0 and len(contacts) and "g_se" in contacts.history:
+        _with_shear_dashpot(model, ints, element, zeta_s[joint], dt)
     return element
 
 
-def _contact_mass(model, ints, contacts, geom) -> np.ndarray:
-    """(m,) the mass each contact's impact dashpot sees (:func:`dda.contact.dashpot.
-    contact_mass`), from the blocks at the step's start."""
+def _with_shear_dashpot(model, ints, element, zeta, dt) -> None:
+    """The step's element with its contacts' shear dashpots (:func:`dda.contact.dashpot.
+    shear_dashpot_start`): the effective shear penalty, the scaled committed ``g_se``, and in
+    ``element.shear_dashpot`` what the step's end needs to undo them."""
+    contacts, g = element.contacts, element.geometry
+    ps = as_float64(element.shear_penalty)
+    tangent = np.ascontiguousarray(np.column_stack((g.normal[:, 1], -g.normal[:, 0])))
+    if BLOCK_KERNELS:
+        cs = dashpot_stiffnesses(zeta, ps, as_float64(g.p1), tangent, contacts.bj, contacts.bk,
+                                 ints.centroid, model.free, model.density, ints.area, ints.sxx,
+                                 ints.syy, float(dt))
+    else:
+        cs = dashpot_stiffness(zeta, ps, _contact_mass(model, ints, contacts, g, tangent), dt)
+    g_se0 = np.array(contacts.history["g_se"], dtype=float)
+    element.shear_penalty, contacts.history["g_se"] = shear_dashpot_start(ps, cs, g_se0)
+    element.shear_dashpot = (ps, cs, g_se0)
+
+
+def _contact_mass(model, ints, contacts, geom, direction=None) -> np.ndarray:
+    """(m,) the mass each contact's impact dashpot sees along its normal, or along
+    ``direction`` (:func:`dda.contact.dashpot.contact_mass`), from the blocks at the step's
+    start."""
     mass = np.where(model.free, model.density * ints.area, np.inf)
     inertia = np.where(model.free, model.density * (ints.sxx + ints.syy), np.inf)
     bj, bk = contacts.bj, contacts.bk
-    return contact_mass(geom.p1, geom.normal, ints.centroid[bj], ints.centroid[bk], mass[bj],
+    return contact_mass(geom.p1, geom.normal if direction is None else direction,
+                        ints.centroid[bj], ints.centroid[bk], mass[bj],
                         mass[bk], inertia[bj], inertia[bk])
 
 

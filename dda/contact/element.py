@@ -209,7 +209,16 @@ class ContactElement:
     dashpot : (m,) array, optional
         Each contact's impact dashpot as a stiffness on the step's change of its normal gap,
         ``c / dt`` (:mod:`dda.contact.dashpot`); None: no dashpot.
+
+    Attributes
+    ----------
+    shear_dashpot : tuple or None
+        Set by the step when the contacts' shear dashpots are in ``shear_penalty`` (which is
+        then ``p_s + c_s / dt``) and in the history's ``g_se``: ``(p_s, c_s / dt, g_se0)``,
+        what :func:`dda.contact.dashpot.shear_dashpot_end` needs at the step's end.
     """
+
+    shear_dashpot = None
 
     def __init__(self, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
                  shear_penalty, laws: LawGroups, geometry: ContactGeometry | None = None,

@@ -22,6 +22,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     shear_penalty = 5e10
     friction = { law = "coulomb", phi = 35.0, cohesion = 0.0 }
     restitution = 0.0                     # optional impact dashpot: 0 (default) no bounce, 1 none
+    shear_dashpot = false                 # optional: damp the sticking shear springs too
     # law = "transition": phi_static, phi_dynamic, onset ("face", or the papers' "contact")
     # law = "barton": jrc, jcs, phi_r, ...
     # law = "my_laws:BrittleCohesion": a law of your own, by import path (see below)
@@ -574,9 +575,10 @@ def _joint(r, spec, p, folder, extra=()):
     """The :class:`dda.contact.JointMaterial` of a joint table."""
     from dda.contact import JointMaterial
 
-    r.table(spec, p, {"normal_penalty", "shear_penalty", "friction", "restitution", *extra})
+    r.table(spec, p, {"normal_penalty", "shear_penalty", "friction", "restitution",
+                      "shear_dashpot", *extra})
     law = _read_friction(r, spec.get("friction"), (*p, "friction"), folder)
-    optional = {"restitution": spec["restitution"]} if "restitution" in spec else {}
+    optional = {k: spec[k] for k in ("restitution", "shear_dashpot") if k in spec}
     return r.call(p, JointMaterial,
                   normal_penalty=r.number_or_auto(spec, p, "normal_penalty"),
                   shear_penalty=r.number_or_auto(spec, p, "shear_penalty"),
