@@ -27,7 +27,7 @@ contacts yield together, as a rigid block does, and the slide follows the rigid 
 At the paper's dt 1e-4 (``--full``) the block also vibrates on its soft shear springs (10 MN/m,
 a 12 ms period) after each slide event, with no loss but Newmark's, which is weak at that dt:
 the face joint's gap to the rigid block is 10.95% there (0.69% at dt 1e-3). ``--shear-dashpot``
-damps the sticking contacts' shear springs (``JointMaterial(shear_dashpot=True)``): 0.30% at
+damps the closed contacts' shear springs (``JointMaterial(shear_dashpot=True)``): 0.30% at
 dt 1e-4, 0.70% at 1e-3.
 
 Each run is compared with a rigid-block Newmark sliding computation with the same friction

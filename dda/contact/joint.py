@@ -34,7 +34,7 @@ class JointMaterial:
         and the penalty: the same block keeps 0.75-0.77 of its rocking amplitude an impact
         at dt 1e-3 and 0.86-0.88 at dt 1e-4 (penalties 2e7 and 2e8 N/m, issue 20).
     shear_dashpot : bool, optional
-        Damp the sticking contacts' shear springs too, with the damping ratio of
+        Damp the closed contacts' shear springs too, with the damping ratio of
         ``restitution`` (:mod:`dda.contact.dashpot`; no effect at ``restitution`` 1). Off by
         default for now. Without it a block at rest on soft shear springs vibrates with no
         loss but Newmark's, which depends on dt: the rock slope of ``examples/rock_slope.py``
