@@ -14,6 +14,8 @@ memory is its own) for ``--steps`` steps and prints:
   opened contacts, switched contacts between stick and slip only, or found only a sliding
   contact whose lagged normal force was off by more than ``NORMAL_FORCE_RTOL``
   (:data:`dda.solvers.open_close.PASS_LOG`);
+- passes a step by how many contacts the step's first pass switched (0, 1-3, 4-10, 11 or
+  more): the settling steps in which few contacts change against those in which many do;
 - peak resident memory above the process's size after the imports and a 2 x 2 warm-up run
   (which loads the compiled kernels and MKL) (MB).
 
@@ -22,7 +24,11 @@ blocks), 55.7 ms (901), 795 ms (3,601) per step, one OPEN-CLOSE pass.
 
 Writes ``benchmarks/results/stacks.md``.
 
+With ``--case wall`` the scenes are instead ``benchmarks/scaling.py``'s running-bond walls of
+``--sizes`` bricks (``results/walls.md``).
+
 Run:  python benchmarks/stacks.py [--sizes 10 30 60] [--steps N] [--solvers legacy newton]
+                                  [--case stack|wall] [--out FILE]
 """
 
 from __future__ import annotations
@@ -61,7 +67,19 @@ def stack(n: int):
     return scene
 
 
-def measure(n: int, solver: str, steps: int) -> dict:
+def scene_of(case: str, n: int):
+    """The N x N stack, or (``case`` "wall") the running-bond wall of N bricks of
+    ``benchmarks/scaling.py`` (0.4 x 0.2 m, the stack's rock and joint, with the joint's
+    default impact dashpot)."""
+    if case == "wall":
+        sys.path.insert(0, str(HERE))
+        from scaling import wall  # noqa: PLC0415
+
+        return wall(n)
+    return stack(n)
+
+
+def measure(n: int, solver: str, steps: int, case: str = "stack") -> dict:
     """One run in this process (see the module docstring)."""
     import dda
     import dda.solvers.open_close as oc
@@ -70,7 +88,7 @@ def measure(n: int, solver: str, steps: int) -> dict:
     # a 2 x 2 stack first: the libraries a run loads (numba's kernels, MKL) are not the
     # stack's memory, and their first call is not its time
     dda.Simulation(stack(2), dt=1e-3, solver=make_solver(solver)).run(3e-3, progress=False)
-    scene = stack(n)
+    scene = scene_of(case, n)
     base_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
     nonlinear = make_solver(solver)
     sim = dda.Simulation(scene, dt=1e-3, solver=nonlinear, max_open_close=30)
@@ -82,8 +100,10 @@ def measure(n: int, solver: str, steps: int) -> dict:
     oc.PASS_LOG = None
     st = result.stats
     blocked = log[:-1] if len(log) else log  # the last pass of a run ends it
+    step_passes = np.asarray(st["open_close_passes"], dtype=int)
     return {
-        "n": n, "blocks": n * n + 1, "solver": solver, "steps": len(st),
+        "n": n, "blocks": n * n + 1 if case == "stack" else n + 1, "case": case,
+        "solver": solver, "steps": len(st),
         "contacts": float(np.mean(st["contacts"])),
         "ms_median": 1e3 * float(np.median(st["wall_time"])),
         "cpu_ms": 1e3 * cpu / len(st),
@@ -101,7 +121,28 @@ def measure(n: int, solver: str, steps: int) -> dict:
         "why_lag_only": int(np.count_nonzero((blocked[:, :3] == 0).all(axis=1)
                                              & (blocked[:, 3] > 0))),
         "peak_mb": (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - base_rss) / 1024.0,
+        "by_changes": passes_by_changes(log, step_passes),
     }
+
+
+#: the bins of :func:`passes_by_changes`: contacts the step's first pass switched
+CHANGE_BINS = ((0, 0), (1, 3), (4, 10), (11, None))
+
+
+def passes_by_changes(log: np.ndarray, step_passes: np.ndarray) -> list | None:
+    """Passes a step by how many contacts its first pass switched (closed, opened, or moved
+    between stick and slip), per bin of :data:`CHANGE_BINS`: ``[steps, mean passes]`` each
+    (mean None for an empty bin); None when the log's passes are not the committed steps'
+    (a cut step's passes are logged too, and are not told apart)."""
+    if int(step_passes.sum()) != len(log):
+        return None
+    first = log[np.concatenate([[0], np.cumsum(step_passes)[:-1]]), :3].sum(axis=1)
+    out = []
+    for lo, hi in CHANGE_BINS:
+        pick = (first >= lo) & ((first <= hi) if hi is not None else True)
+        n = int(np.count_nonzero(pick))
+        out.append([n, float(step_passes[pick].mean()) if n else None])
+    return out
 
 
 def main(argv=None):
@@ -110,31 +151,42 @@ def main(argv=None):
     ap.add_argument("--steps", type=int, default=None,
                     help="steps per run (default: 100 up to 30 x 30, 30 beyond)")
     ap.add_argument("--solvers", nargs="+", default=["legacy", "newton"])
+    ap.add_argument("--case", choices=["stack", "wall"], default="stack",
+                    help="N x N stacks (default), or running-bond walls of N bricks")
     ap.add_argument("--one", nargs=3, metavar=("N", "SOLVER", "STEPS"), help=argparse.SUPPRESS)
-    ap.add_argument("--out", default=str(HERE / "results" / "stacks.md"))
+    ap.add_argument("--out", default=None,
+                    help="the table (default: results/stacks.md, results/walls.md)")
     args = ap.parse_args(argv)
     if args.one:  # the child process
-        print(json.dumps(measure(int(args.one[0]), args.one[1], int(args.one[2]))))
+        print(json.dumps(measure(int(args.one[0]), args.one[1], int(args.one[2]),
+                                 args.case)))
         return None
     rows = []
     for n in args.sizes:
         for solver in args.solvers:
             steps = args.steps or (100 if n <= 30 else 30)
-            out = subprocess.run([sys.executable, __file__, "--one", str(n), solver,
+            out = subprocess.run([sys.executable, __file__, "--case", args.case, "--one",
+                                  str(n), solver,
                                   str(steps)], capture_output=True, text=True, check=True)
             row = json.loads(out.stdout.strip().splitlines()[-1])
             rows.append(row)
             print(_line(row), flush=True)
     table = _table(rows)
+    args.out = args.out or str(HERE / "results" / f"{args.case}s.md")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(table)
     print(f"wrote {args.out}")
     return rows
 
 
+def _c_code(r) -> float:
+    return C_CODE_MS.get(r["n"], float("nan")) if r.get("case", "stack") == "stack" else float(
+        "nan")
+
+
 def _line(r) -> str:
     return (f"{r['blocks']:5d} blocks {r['solver']:6s} {r['ms_median']:8.1f} ms/step "
-            f"(C code {C_CODE_MS.get(r['n'], float('nan')):.4g}), {r['passes']:.2f} passes, "
+            f"(C code {_c_code(r):.4g}), {r['passes']:.2f} passes, "
             f"{r['solves']:.2f} solves, {r['factorizations']:.2f} factorizations, "
             f"{r['analyses']:.2f} analyses ({r['backend']}), {r['cuts']} cuts, "
             f"{r['peak_mb']:.0f} MB")
@@ -147,14 +199,33 @@ def _table(rows) -> str:
             + "---|" * 14 + "\n")
     body = "".join(
         f"| {r['blocks']:,} | {r['contacts']:,.0f} | {r['solver']} | {r['ms_median']:.1f} | "
-        f"{r['cpu_ms']:.1f} | {C_CODE_MS.get(r['n'], float('nan')):.4g} | {r['passes']:.2f} | "
+        f"{r['cpu_ms']:.1f} | {_c_code(r):.4g} | {r['passes']:.2f} | "
         f"{r['iterations']:.2f} | {r['solves']:.2f} | {r['factorizations']:.2f} "
         f"({r['analyses']:.2f}) | {r['backend']} | {r['cuts']} | {r['why_close']} / "
         f"{r['why_open']} / {r['why_stick_slip_only']} / {r['why_lag_only']} | "
         f"{r['peak_mb']:.0f} |\n" for r in rows)
-    return ("# N x N stacks settling under gravity (`python benchmarks/stacks.py`)\n\n"
-            "The first steps of dt 1e-3 from the start (100 up to 30 x 30, 30 beyond).\n\n"
-            + head + body)
+    bins = [f"{lo}" if hi == lo else (f"{lo}+" if hi is None else f"{lo}-{hi}")
+            for lo, hi in CHANGE_BINS]
+    head2 = ("| blocks | solver | steps | " + " | ".join(bins) + " |\n|"
+             + "---|" * (3 + len(bins)) + "\n")
+    body2 = "".join(
+        f"| {r['blocks']:,} | {r['solver']} | {r['steps']} | "
+        + " | ".join(_bin_cell(b) for b in (r["by_changes"] or [[0, None]] * len(bins)))
+        + " |\n" for r in rows)
+    title = ("Running-bond walls settling under gravity (`python benchmarks/stacks.py --case "
+             "wall`)" if rows and rows[0].get("case") == "wall" else
+             "N x N stacks settling under gravity (`python benchmarks/stacks.py`)")
+    return (f"# {title}\n\n"
+            "Steps of dt 1e-3 from the start (`--steps`; by default 100 up to 30 x 30, 30 "
+            "beyond; each run's count is in the second table).\n\n" + head + body
+            + "\nPasses a step by the contacts its first pass switched (closed, opened, or "
+            "between stick and slip): mean passes (steps); n/a where a cut step's passes "
+            "cannot be told apart.\n\n" + head2 + body2)
+
+
+def _bin_cell(b) -> str:
+    n, mean = b
+    return "n/a" if n and mean is None else ("-" if not n else f"{mean:.2f} ({n})")
 
 
 if __name__ == "__main__":
