@@ -222,7 +222,8 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
 
 
 @njit(cache=True)
-def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, unsettled, max_iter,
+def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patience, unsettled,
+                      max_iter,
                       predictor_iterations, tol, round_off, halvings_allowed, cycle_length,
                       block_k, block_f, d_known, n, block_base, block_step, free_blocks,
                       pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms,
@@ -268,7 +269,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, unset
     for settle_friction in (False, True):
         oc_status, oc_passes, d, _, _, _, friction_settled = dense_passes(
             max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after,
-            block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
+            patience, block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
             pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row,
             i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference, release, kind,
             mu_s, mu_d, cohesion, face, g_pb, sliding_pb, t_stick, state, held, gap_tol, t_n0)

@@ -110,17 +110,18 @@ def single_switch(state, proposed, gap):
 
 @njit(cache=True)
 def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
-                 block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
-                 pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free,
-                 e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference,
-                 release, kind, mu_s, mu_d, cohesion, face, g_se, sliding, t_stick, state,
-                 held, gap_tol, t_n_lag):
+                 patience, block_k, block_f, d_known, n, block_base, block_step, free_blocks,
+                 pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms, bj,
+                 bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot,
+                 reference, release, kind, mu_s, mu_d, cohesion, face, g_se, sliding, t_stick,
+                 state, held, gap_tol, t_n_lag):
     """Every pass of one step's OPEN-CLOSE iteration on a dense system (module docstring).
 
     Parameters
     ----------
     max_passes : passes allowed
-    settle_friction, band, rtol, floor, cycle_tension, relax_after : the iteration's rules
+    settle_friction, band, rtol, floor, cycle_tension, relax_after, patience : the
+        iteration's rules
         (:func:`dda.kernels.open_close.pass_judge`)
     block_k, block_f, d_known : the step's block matrices, forces and known increments
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
@@ -153,6 +154,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     dgs_prev = np.zeros(m)
     flips = np.zeros(m, dtype=np.int64)
     pinned = np.zeros(m, dtype=np.bool_)
+    calm = np.zeros(1, dtype=np.int64)
     lag_error = np.zeros(m)
     seen = np.empty((max_passes + 1, m), dtype=np.int8)
     seen[0] = state
@@ -193,9 +195,10 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
             dgs[c] = s_
             judged[c] = gap[c] - release[c] if has_dashpot else gap[c]
         new_state, _, done, friction_settled, next_lag, lag_error, _ = pass_judge(
-            state, held, judged, dgs, t_slip, t_n_lag, lag_error, flips, pinned, gap_tol, kn,
-            ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj, bk, free,
-            settle_friction, band, passes, rtol, floor, cycle_tension, relax_after)
+            state, held, judged, dgs, t_slip, t_n_lag, lag_error, flips, pinned, calm,
+            gap_tol, kn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj, bk,
+            free, settle_friction, band, passes, rtol, floor, cycle_tension, relax_after,
+            patience)
         if done:
             return CONVERGED, passes, d, new_state, gap.copy(), dgs.copy(), friction_settled
         changed = False
@@ -238,7 +241,8 @@ def first_states(state0, over, gap0, gap_tol, explicit):
 
 
 @njit(cache=True)
-def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, block_k,
+def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, patience,
+                      block_k,
                       block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
                       pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free,
                       e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference,
@@ -267,7 +271,8 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
                                                     g_se0, slip0, sliding0, t_n0, ps, length)
     state, held = first_states(state0, over, gap0, gap_tol, True)
     status, passes, d, state, gap, dgs, _ = dense_passes(
-        max_passes, True, band, rtol, floor, cycle_tension, relax_after, block_k, block_f,
+        max_passes, True, band, rtol, floor, cycle_tension, relax_after, patience, block_k,
+        block_f,
         d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
         side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,
         length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,

@@ -332,16 +332,20 @@ def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev,
 
 
 @njit(cache=True)
-def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned, gap_tol, pn,
-               ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj, bk, free,
-               settle_friction, band, passes, rtol, floor, cycle_tension, relax_after):
+def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned, calm,
+               gap_tol, pn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj,
+               bk, free, settle_friction, band, passes, rtol, floor, cycle_tension,
+               relax_after, patience):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
     Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
     the states the pass asks for (after the cycle rule), its normal forces, whether the
     iteration has settled, whether the stick and slip states settled too, the lagged normal
     force of the next pass with this pass's lag error, and which contacts' lagged force
-    counts as settled. ``flips`` and ``pinned`` change in place.
+    counts as settled. ``flips``, ``pinned`` and ``calm`` (a 1-element count of the passes in
+    a row that changed no contact between open and closed) change in place; without
+    ``settle_friction`` the iteration has settled once ``calm`` reaches ``patience``, whatever
+    the friction and lagged forces (:data:`dda.solvers.open_close.LAG_PATIENCE`).
     """
     m = state.shape[0]
     new_state = np.empty(m, dtype=np.int8)
@@ -382,13 +386,16 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
             flips[i] += 1
     settled = True
     friction_settled = True
+    same_contact = True  # no contact changed between open and closed
     for i in range(m):
         if new_state[i] != state[i]:
             friction_settled = False
+        same_contact = same_contact and (new_state[i] != _OPEN) == (state[i] != _OPEN)
         if settle_friction:
             settled = settled and new_state[i] == state[i]
-        else:
-            settled = settled and (new_state[i] != _OPEN) == (state[i] != _OPEN)
+    if not settle_friction:
+        settled = same_contact
+    calm[0] = calm[0] + 1 if same_contact else 0
     lag_settled = _lag_all(lag_ok, state)
     if band != 0.0 and not (settled and lag_settled):
         local = _local_force(t_n, bj, bk, free, band)
@@ -400,6 +407,9 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
                                   settle_friction, local)
         lag_settled = _lag_all(lag_ok, state)
     done = settled and lag_settled
+    if not (done or settle_friction) and calm[0] >= patience:
+        done = True
+        friction_settled = False
     next_lag = t_n.copy()
     error = np.empty(m)
     for i in range(m):

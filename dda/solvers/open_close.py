@@ -24,6 +24,15 @@ they do not converge from there is the iteration run again to the full rule. Leg
 DDA keeps the full rule: without it (as in Shi's code) a contact that starts sliding in the
 last pass ends the step stuck, and the README demo's block slid back up its joint.
 
+As the fully implicit method's predictor the iteration has also settled once
+``LAG_PATIENCE`` passes in a row have changed no contact between open and closed, whatever its
+stick and slip states and lagged normal forces (its result then says the friction did not
+settle, and Newton gets the predictor's few iterations before the full rule is tried): Newton
+computes every contact's friction from its exact normal force anyway. On the 1,000-brick wall
+of ``benchmarks/scaling.py`` one step's predictor had settled its open and closed states by
+pass 4 and then switched one contact between stick and slip, and found 10 to 17 lagged forces
+off, in every pass until the limit of 30 cut the step.
+
 Three rules keep the iteration honest (each was needed; tests/test_dynamics.py shows why):
 - a sliding contact whose trial shear force turns against the friction load of the pass
   sticks (Shi's rule; without it friction does positive work and a block that hits a stop
@@ -117,7 +126,8 @@ from dda.solvers.base import StepProblem
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve
 
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
-           "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "SETTLE_BAND", "round_off_gap"]
+           "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "LAG_PATIENCE", "SETTLE_BAND",
+           "round_off_gap"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
@@ -130,6 +140,9 @@ GAP_ROUND_OFF = 1e-12
 CYCLE_TENSION = 1e-2
 # the pass from which a sliding contact's lagged normal force is under-relaxed
 LAG_RELAX_AFTER = 6
+# the fully implicit method's predictor: settled once this many passes in a row have changed no
+# contact between open and closed, whatever its friction (module docstring)
+LAG_PATIENCE = 5
 # legacy DDA: a pass whose state changes each move less force than this fraction of the largest
 # normal force on the lighter loaded of the contact's blocks counts as settled (module docstring)
 SETTLE_BAND = 1e-2
@@ -193,6 +206,7 @@ def open_close(problem: StepProblem, explicit: bool,
     flips = np.zeros(len(el), dtype=np.int64)  # open <-> closed changes of each contact so far
     pinned = np.zeros(len(el), dtype=bool)  # held closed by the cycle rule
     lag_error = np.zeros(len(el))  # the last pass's normal force less its lagged one
+    calm = 0  # passes in a row that changed no contact between open and closed
     for passes in range(1, problem.max_open_close + 1):
         # evaluated on every closed contact (used on the sliding ones): a law that judges
         # faces needs a face's sticking contacts too
@@ -223,9 +237,12 @@ def open_close(problem: StepProblem, explicit: bool,
                                                      local)
         if PASS_LOG is not None:
             PASS_LOG.append(_why(state, new_state, lag_ok))
+        calm = calm + 1 if np.array_equal(new_state != OPEN, state != OPEN) else 0
         if settled and np.all(lag_ok | (state != SLIP)):
             return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
                                    bool(np.array_equal(new_state, state)))
+        if not settle_friction and calm >= LAG_PATIENCE:
+            return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history, False)
         if new_state.tobytes() in seen and not np.array_equal(new_state, state):
             held = _unhold_cycling(held, state, new_state)
             new_state = _single_switch(state, new_state, judged)
@@ -272,6 +289,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     seen = {state.tobytes()}
     flips = np.zeros(m, dtype=np.int64)
     pinned = np.zeros(m, dtype=bool)
+    calm = np.zeros(1, dtype=np.int64)
     lag_error = np.zeros(m)
     for passes in range(1, problem.max_open_close + 1):
         with section("return_map"):
@@ -285,7 +303,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         with section("return_map"):
             new_state, t_n, done, friction_settled, next_lag, lag_error, lag_ok = pass_judge(
-                state, held, judged, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
+                state, held, judged, dgs, t_slip, t_n_lag, lag_error, flips, pinned, calm,
                 gap_tol, kn, ps, length, *laws, g_se, sliding, bj, bk, free, settle_friction,
                 float(band), passes, *rules)
         if PASS_LOG is not None:
@@ -344,8 +362,10 @@ def dense_layout(pattern) -> tuple:
 
 def pass_rules() -> tuple:
     """The passes' rules as the kernels take them: ``NORMAL_FORCE_RTOL``,
-    ``NORMAL_FORCE_FLOOR``, ``CYCLE_TENSION``, ``LAG_RELAX_AFTER`` (read at each call)."""
-    return (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER)
+    ``NORMAL_FORCE_FLOOR``, ``CYCLE_TENSION``, ``LAG_RELAX_AFTER``, ``LAG_PATIENCE`` (read at
+    each call)."""
+    return (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER,
+            LAG_PATIENCE)
 
 
 def dense_failure(status: int, passes: int) -> str:

@@ -1,0 +1,53 @@
+"""The fully implicit method's predictor settles once its open and closed states stand
+(``dda.solvers.open_close.LAG_PATIENCE``), whatever its friction does.
+
+The 1,000-brick running-bond wall of ``benchmarks/scaling.py`` settling from a touching start:
+at t = 9 ms one step's predictor had its open and closed states from pass 4 on, then switched
+one contact between stick and slip and found 10 to 17 sliding contacts' lagged normal forces
+off in every pass until the limit of 30 cut the step.
+"""
+
+import sys
+from pathlib import Path
+
+import pytest
+
+import dda
+import dda.solvers.open_close as oc
+from dda.contact import CoulombSingle, JointMaterial
+from dda.solvers import NewtonRaphson
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from scaling import wall  # noqa: E402
+
+STEPS = 10
+
+
+class PlainCoulomb(CoulombSingle):
+    """The built-in law as a user's own: no compiled kernel, the numpy passes."""
+
+
+def _run(law=None):
+    scene = wall(1000)
+    if law is not None:
+        scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10, friction=law))
+    sim = dda.Simulation(scene, dt=1e-3, solver=NewtonRaphson(), max_open_close=30)
+    return sim.run(STEPS * 1e-3, progress=False)
+
+
+def test_the_wall_settles_without_a_cut_step():
+    result = _run()
+    assert result.stats.cuts == []
+    assert len(result.stats) == STEPS
+
+
+def test_the_numpy_passes_follow_the_same_rule():
+    result = _run(PlainCoulomb(phi=35.0))
+    assert result.stats.cuts == []
+
+
+def test_without_the_rule_the_step_is_cut(monkeypatch):
+    monkeypatch.setattr(oc, "LAG_PATIENCE", 10**6)
+    result = _run()
+    assert [c[2] for c in result.stats.cuts] == ["OPEN-CLOSE did not settle in 30 passes"]
+    assert result.stats.cuts[0][0] == pytest.approx(9e-3)
