@@ -223,14 +223,12 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
 
 @njit(cache=True)
 def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patience, unsettled,
-                      max_iter,
-                      predictor_iterations, tol, round_off, halvings_allowed, cycle_length,
-                      block_k, block_f, d_known, n, block_base, block_step, free_blocks,
-                      pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms,
-                      bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot,
-                      dashpot, reference, release, kind, mu_s, mu_d, cohesion, face, state0,
-                      g_se0, slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0,
-                      shear0):
+                      max_iter, predictor_iterations, tol, round_off, halvings_allowed,
+                      cycle_length, block_k, block_f, d_known, n, block_base, block_step,
+                      free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows,
+                      terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot,
+                      dashpot, reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se0,
+                      slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0, shear0):
     """The fully implicit method's whole step on a dense system
     (:meth:`dda.solvers.NewtonRaphson.solve_step`) in one call: the pull-back and first
     states, the predictor (OPEN-CLOSE with the open and closed states settled,
@@ -268,11 +266,11 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
     g_se, slip, sliding = g_se0.copy(), slip0.copy(), sliding0.copy()
     for settle_friction in (False, True):
         oc_status, oc_passes, d, _, _, _, friction_settled = dense_passes(
-            max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after,
-            patience, block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
-            pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row,
-            i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference, release, kind,
-            mu_s, mu_d, cohesion, face, g_pb, sliding_pb, t_stick, state, held, gap_tol, t_n0)
+            max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after, patience,
+            block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step,
+            side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn,
+            ps, kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion,
+            face, g_pb, sliding_pb, t_stick, state, held, gap_tol, t_n0)
         passes += oc_passes
         solves += oc_passes
         if oc_status != CONVERGED and not (oc_status == NOT_SETTLED and unsettled):

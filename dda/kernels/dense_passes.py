@@ -121,8 +121,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     ----------
     max_passes : passes allowed
     settle_friction, band, rtol, floor, cycle_tension, relax_after, patience : the
-        iteration's rules
-        (:func:`dda.kernels.open_close.pass_judge`)
+        iteration's rules (:func:`dda.kernels.open_close.pass_judge`)
     block_k, block_f, d_known : the step's block matrices, forces and known increments
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
         the dense layout of :class:`dda.solvers.linear.SystemPattern`
@@ -242,8 +241,7 @@ def first_states(state0, over, gap0, gap_tol, explicit):
 
 @njit(cache=True)
 def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, patience,
-                      block_k,
-                      block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
+                      block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
                       pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free,
                       e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference,
                       release, kind, mu_s, mu_d, cohesion, face, state0, g_se0, slip0, sliding0,
@@ -272,8 +270,7 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
     state, held = first_states(state0, over, gap0, gap_tol, True)
     status, passes, d, state, gap, dgs, _ = dense_passes(
         max_passes, True, band, rtol, floor, cycle_tension, relax_after, patience, block_k,
-        block_f,
-        d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
+        block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
         side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,
         length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,
         g_se, sliding, t_stick, state, held, gap_tol, t_n0)
