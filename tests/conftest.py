@@ -100,10 +100,11 @@ def shaken_block_scene(phi, amplitude, freq=2.0):
     return scene, table, top
 
 
-def stack_scene(n, restitution=None):
+def stack_scene(n, restitution=None, shear_dashpot=None):
     """The N x N stack of 1 m squares on a fixed base of ``benchmarks/stacks.py`` (E 10 GPa,
-    p 1e10 N/m, phi 35 degrees), with the joint's default impact dashpot; ``restitution=1``
-    takes it off, as the benchmark does (its scenes are Berkeley's C code's, which has none)."""
+    p 1e10 N/m, phi 35 degrees), with the joint's default impact dashpots; ``restitution=1``
+    takes them off, as the benchmark does (its scenes are Berkeley's C code's, which has none),
+    ``shear_dashpot=False`` the shear one alone."""
     stone = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
     scene = dda.Scene(gravity=9.81)
     scene.add_block([(-1.0, -1.0), (n + 1.0, -1.0), (n + 1.0, 0.0), (-1.0, 0.0)], stone,
@@ -113,5 +114,9 @@ def stack_scene(n, restitution=None):
             scene.add_block([(j, i), (j + 1, i), (j + 1, i + 1), (j, i + 1)], stone)
     joint = JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
                           friction=CoulombSingle(phi=35.0))
-    scene.set_joint(joint if restitution is None else replace(joint, restitution=restitution))
+    if restitution is not None:
+        joint = replace(joint, restitution=restitution)
+    if shear_dashpot is not None:
+        joint = replace(joint, shear_dashpot=shear_dashpot)
+    scene.set_joint(joint)
     return scene

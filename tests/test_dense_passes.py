@@ -87,7 +87,9 @@ def test_the_kernel_ran_and_its_numbers_are_not_the_composed_bits(monkeypatch):
 
 
 def _captured_problem(monkeypatch):
-    """The StepProblem of the 3 x 3 stack's first step."""
+    """The StepProblem of the 3 x 3 stack's first step (without the shear dashpot, whose
+    stiffness leaves the broken systems below nearly singular instead of singular, a case the
+    two paths' solvers tell apart at different passes)."""
     problems = []
     solver = dda.solvers.LegacyPullBack()
     original = solver.solve_step
@@ -97,7 +99,8 @@ def _captured_problem(monkeypatch):
         return original(problem)
 
     monkeypatch.setattr(solver, "solve_step", capture)
-    dda.Simulation(stack_scene(3), dt=1e-3, solver=solver).run(1e-3, progress=False)
+    dda.Simulation(stack_scene(3, shear_dashpot=False), dt=1e-3,
+                   solver=solver).run(1e-3, progress=False)
     return problems[0]
 
 

@@ -71,9 +71,10 @@ def test_a_sliding_contact_splits_its_friction_between_spring_and_dashpot():
 def test_the_option_is_a_bool_and_a_scene_file_key(tmp_path):
     with pytest.raises(TypeError, match="shear_dashpot must be True or False"):
         JointMaterial(1e9, 1e9, CoulombSingle(phi=30.0), shear_dashpot="yes")
-    text = FULL.replace("restitution = 0.2", "restitution = 0.2\nshear_dashpot = true")
+    assert JointMaterial(1e9, 1e9, CoulombSingle(phi=30.0)).shear_dashpot  # the default
+    text = FULL.replace("restitution = 0.2", "restitution = 0.2\nshear_dashpot = false")
     scene = load_scene(write(tmp_path, text)).scene
-    assert scene.joint_for(0, 1).shear_dashpot and not scene.joint_for(1, 2).shear_dashpot
+    assert not scene.joint_for(0, 1).shear_dashpot and scene.joint_for(1, 2).shear_dashpot
 
 
 def _rock_slope(dt, solver, shear_dashpot):

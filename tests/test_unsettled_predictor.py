@@ -20,11 +20,14 @@ from tests.test_cli_and_pictures import SCENE
 def _stopper():
     """A 0.2 m block striking a stopper at 5 m/s, 1e9 N/m, restitution 0: its predictor does
     not settle in the impact's steps at dt 1e-3 (a contact that closes and bounces open
-    inside one step)."""
+    inside one step). No shear dashpot: with it, Newton from the last pass of one such step
+    does not converge in 25 iterations either (|R| 0.68 of the forces), and the step is cut
+    with the option too."""
     scene = S.stopper_impact()[0]
     joint = scene.default_joint
     scene.set_joint(replace(joint, normal_penalty=joint.normal_penalty / 1e4,
-                            shear_penalty=joint.shear_penalty / 1e4, restitution=0.0))
+                            shear_penalty=joint.shear_penalty / 1e4, restitution=0.0,
+                            shear_dashpot=False))
     return scene
 
 

@@ -40,11 +40,11 @@ the spring is back at its length): 0.135 for a single contact at e = 0, exp(-2).
 rocking block, whose striking corner carries the block on, loses what Housner says at e = 0
 (``tests/validation/test_rocking_block.py``).
 
-With ``JointMaterial(shear_dashpot=True)`` the joint's closed contacts also get a shear
-dashpot of the same damping ratio, ``c_s = 2 zeta sqrt(p_s m_s)`` with ``m_s`` the contact mass
-along the edge (the lever arm of the tangent), in parallel with the shear spring and acting
-on the step's shear increment; the pair is a Kelvin-Voigt element in series with the friction
-law's slider. A sticking contact carries
+With ``JointMaterial(shear_dashpot=True)`` (the default) the joint's closed contacts also get
+a shear dashpot of the same damping ratio, ``c_s = 2 zeta sqrt(p_s m_s)`` with ``m_s`` the
+contact mass along the edge (the lever arm of the tangent), in parallel with the shear spring
+and acting on the step's shear increment; the pair is a Kelvin-Voigt element in series with
+the friction law's slider. A sticking contact carries
 
     t_s = p_s g_se0 + (p_s + c_s / dt) dg_s
 

@@ -22,7 +22,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     shear_penalty = 5e10
     friction = { law = "coulomb", phi = 35.0, cohesion = 0.0 }
     restitution = 0.0                     # optional impact dashpot: 0 (default) no bounce, 1 none
-    shear_dashpot = false                 # optional: damp the contacts' shear springs too
+    shear_dashpot = true                  # optional: damp the shear springs too (default)
     # law = "transition": phi_static, phi_dynamic, onset ("face", or the papers' "contact")
     # law = "barton": jrc, jcs, phi_r, ...
     # law = "my_laws:BrittleCohesion": a law of your own, by import path (see below)

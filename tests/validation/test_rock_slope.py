@@ -4,6 +4,8 @@ Short version of ``examples/rock_slope.py``: the same slope and the same 2 Hz ta
 670 gal in eight steps, but 0.5 s per step (4 s in all) instead of 2 s.
 """
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -15,9 +17,10 @@ from dda.studies.references import sliding_block
 PHI_S, PHI_D = 40.5, 31.6
 
 
-def run(law, phi_d):
+def run(law, phi_d, shear_dashpot=True):
     table = stepped_table(670.0, 2.0, 8, 0.5)
     scene, lower, upper = rock_slope(law, table)
+    scene.set_joint(replace(scene.default_joint, shear_dashpot=shear_dashpot))
     result = dda.Simulation(scene, dt=1e-3).run(4.0)
     t = np.asarray(result.time)
     slide = slide_down_dip(result, lower, upper)
@@ -39,7 +42,10 @@ def single():
 
 @pytest.fixture(scope="module")
 def transition():
-    return run(StaticDynamicTransition(PHI_S, PHI_D, onset="contact"), PHI_D)
+    """The papers' joint: no shear dashpot (with it the per-contact onset slides from 2.25 s,
+    a level early; ``StaticDynamicTransition``'s docstring says why)."""
+    return run(StaticDynamicTransition(PHI_S, PHI_D, onset="contact"), PHI_D,
+               shear_dashpot=False)
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +62,7 @@ def test_one_friction_angle_follows_rigid_sliding(single):
 
 
 def test_transition_starts_on_time(transition):
-    """The papers' per-contact onset; it slides farther than the rigid block (5.8 % here,
+    """The papers' per-contact onset; it slides farther than the rigid block (4.8 % here,
     up to 19 % over the 16 s of the example): see ``examples/rock_slope.py``."""
     start, rigid_start, _, _ = transition
     assert abs(start - rigid_start) < 0.05  # measured 1 ms
@@ -66,4 +72,4 @@ def test_transition_with_face_onset_follows_rigid_sliding(face):
     start, rigid_start, gap, slide = face
     assert abs(start - rigid_start) < 0.05  # measured 9 ms (the 0.1 mm threshold)
     assert slide > 0.05  # 99.5 mm compared
-    assert gap < 0.05  # measured 0.63 %
+    assert gap < 0.05  # measured 0.64 %
