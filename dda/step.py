@@ -47,6 +47,7 @@ from dda.model import Model
 from dda.profiling import section
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.newmark import effective_system, updated_velocity
+from dda.solvers.open_close import gap_round_off
 
 __all__ = ["StepSettings", "StepState", "StepReport", "step", "search_distance",
            "deepest_spring", "SEARCH_FACTOR"]
@@ -56,6 +57,11 @@ __all__ = ["StepSettings", "StepState", "StepReport", "step", "search_distance",
 # (dda.kernels.dashpot): the numpy path's bits, some 60 us less of a 2-block step; False
 # sends every scene through numpy (the reference the kernels are tested against)
 BLOCK_KERNELS = True
+
+# the contact element's law-independent arrays and dashpots from one kernel call
+# (ContactElement.compiled; the same bits, some 40 us less of a 2-block step); False builds
+# them through the constructor and the dashpot kernels
+COMPILED_ELEMENT = True
 
 # the search distance is this multiple of the step's predicted largest vertex displacement
 SEARCH_FACTOR = 2.5
@@ -309,6 +315,8 @@ def _element(model, state, found: _Detected, ints, dt: float) -> ContactElement:
         laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
     laws.initial_history(contacts.history, found.fresh)
     pn = model.joints.normal_penalty[joint]
+    if COMPILED_ELEMENT and BLOCK_KERNELS and len(contacts):
+        return _compiled_element(model, state, found, ints, dt, joint, laws, pn)
     element = ContactElement(contacts, state.x, ints.centroid, model.topo.nxt, model.topo.prv,
                              pn, model.joints.shear_penalty[joint], laws, found.geometry)
     zeta = model.joints.damping_ratio
@@ -326,6 +334,19 @@ def _element(model, state, found: _Detected, ints, dt: float) -> ContactElement:
     if zeta_s is not None and dt > 0.0 and len(contacts) and "g_se" in contacts.history:
         _with_shear_dashpot(model, ints, element, zeta_s[joint], dt)
     return element
+
+
+def _compiled_element(model, state, found, ints, dt, joint, laws, pn) -> ContactElement:
+    """:func:`_element` through :meth:`ContactElement.compiled` (the same arrays)."""
+    damped = dt > 0.0
+    zeta = model.joints.damping_ratio
+    zeta_s = getattr(model.joints, "shear_damping_ratio", None)
+    return ContactElement.compiled(
+        found.contacts, state.x, ints.centroid, model.topo.nxt, model.topo.prv, pn,
+        model.joints.shear_penalty[joint], laws, found.geometry,
+        (model.free, model.density, ints.area, ints.sxx, ints.syy), float(dt),
+        gap_round_off(), zeta[joint] if damped and zeta is not None else None,
+        zeta_s[joint] if damped and zeta_s is not None else None)
 
 
 def _with_shear_dashpot(model, ints, element, zeta, dt) -> None:

@@ -25,6 +25,7 @@ from dda.contact.kinematics import (
 )
 from dda.contact.tangent import SPRING_TERMS, consistent_tangent
 from dda.kernels.dashpot import add_dashpot
+from dda.kernels.element import element_arrays
 from dda.kernels.kinematics import pair_increments as _pair_increments
 from dda.kernels.open_close import (
     as_float64,
@@ -36,6 +37,8 @@ from dda.kernels.pair_stiffness import PairStiffness, legacy_springs
 from dda.profiling import section
 
 __all__ = ["ContactElement", "LawGroups", "KERNEL_LAWS"]
+
+_NO_DAMPING = np.zeros(0)
 
 #: the built-in laws take the compiled paths of :mod:`dda.kernels.open_close` (OPEN-CLOSE's
 #: passes, legacy DDA's step end, the fully implicit method's contact response); False: the
@@ -216,9 +219,13 @@ class ContactElement:
         Set by the step when the contacts' shear dashpots are in ``shear_penalty`` (which is
         then ``p_s + c_s / dt``) and in the history's ``g_se``: ``(p_s, c_s / dt, g_se0)``,
         what :func:`dda.contact.dashpot.shear_dashpot_end` needs at the step's end.
+    gap_round_off : (m,) array or None
+        The round-off of each contact's linearized gap, when :meth:`compiled` computed it
+        (:func:`dda.solvers.open_close.round_off_gap`).
     """
 
     shear_dashpot = None
+    gap_round_off = None
 
     def __init__(self, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
                  shear_penalty, laws: LawGroups, geometry: ContactGeometry | None = None,
@@ -230,6 +237,68 @@ class ContactElement:
         with section("contact_element"):
             self._build(contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws,
                         geometry)
+
+    @classmethod
+    def compiled(cls, contacts: ContactSet, x, centroids, nxt, prv, normal_penalty,
+                 shear_penalty, laws: LawGroups, geometry: ContactGeometry | None, blocks,
+                 dt: float, round_off: tuple[float, float], zeta=None,
+                 zeta_s=None) -> ContactElement:
+        """The element of a step with every law-independent array from one kernel call
+        (:func:`dda.kernels.element.element_arrays`): the same arrays as the constructor's,
+        and, where ``zeta`` / ``zeta_s`` give the contacts' impact / shear dashpot damping
+        ratios, the dashpots the step adds (:mod:`dda.contact.dashpot`; the shear one into
+        ``shear_penalty``, the history's ``g_se`` and :attr:`shear_dashpot`).
+
+        ``blocks`` is ``(free, density, area, sxx, syy)`` of the blocks at the step's start
+        (the contact masses); ``dt`` the step (s); ``round_off`` the relative and absolute
+        round-off of a linearized gap (:func:`dda.solvers.open_close.round_off_gap`, kept as
+        :attr:`gap_round_off`).
+        """
+        if len(contacts) == 0:
+            return cls(contacts, x, centroids, nxt, prv, normal_penalty, shear_penalty, laws,
+                       geometry)
+        self = cls.__new__(cls)
+        with section("contact_element"):
+            if geometry is None:
+                geometry = contact_geometry(x, contacts.vertex, contacts.edge, nxt)
+            if laws.uses_faces:
+                laws = LawGroups(laws.groups, contact_faces(x, contacts.vertex, contacts.edge,
+                                                            nxt, prv))
+            g = geometry
+            pn, ps = as_float64(normal_penalty), as_float64(shear_penalty)
+            g_se = contacts.history.get("g_se") if zeta_s is not None else None
+            if g_se is None:
+                zeta_s = None
+            no = _NO_DAMPING
+            (length, maps, shear0, e_row, i_row, rows, gap_tol, dashpot, reference, release,
+             judge, shear_dashpot, ps_eff, g_se_scaled) = element_arrays(
+                as_float64(x), as_float64(centroids), nxt, prv, contacts.vertex, contacts.edge,
+                contacts.bj, contacts.bk, as_float64(contacts.xi0), as_float64(g.p1),
+                as_float64(g.p2), as_float64(g.p3), as_float64(g.length), as_float64(g.tau),
+                as_float64(g.normal), as_float64(g.gap), pn, ps,
+                no if g_se is None else as_float64(g_se),
+                no if zeta is None else as_float64(zeta),
+                no if zeta_s is None else as_float64(zeta_s), *blocks, float(dt),
+                float(round_off[0]), float(round_off[1]))
+        self.contacts, self.bj, self.bk = contacts, contacts.bj, contacts.bk
+        self.normal_penalty, self.shear_penalty = normal_penalty, shear_penalty
+        self.laws, self.geometry = laws, g
+        self.gap0, self.shear0, self.length = g.gap, shear0, length
+        self.maps = (maps[0], maps[1], maps[2])
+        self.e_row, self.i_row = e_row, i_row
+        self.gap_round_off = gap_tol
+        # the lazily computed properties, computed
+        self.__dict__.update(_spring_rows=rows, dashpot_reference=reference)
+        self.dashpot = None
+        if zeta is not None:
+            self.dashpot = dashpot
+            self.__dict__.update(release=release, judge_stiffness=judge)
+        if zeta_s is not None:
+            g_se0 = np.array(g_se, dtype=float)
+            self.shear_penalty = ps_eff
+            contacts.history["g_se"] = g_se_scaled
+            self.shear_dashpot = (ps, shear_dashpot, g_se0)
+        return self
 
     def _build_empty(self, contacts, normal_penalty, shear_penalty, laws):
         self.contacts = contacts

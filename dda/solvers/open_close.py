@@ -559,9 +559,18 @@ def round_off_gap(element) -> np.ndarray:
     ``GAP_ROUND_OFF`` of the contacted edge's length, or the round-off of the coordinates
     the gap is computed from when those are larger (a scene far from the origin).
     """
+    kept = getattr(element, "gap_round_off", None)  # (ContactElement.compiled)
+    if kept is not None:
+        return kept
     g = element.geometry
     return round_off_gaps(as_float64(g.p1), as_float64(g.p2), as_float64(g.length),
                           GAP_ROUND_OFF, _COORDINATE_ROUND_OFF)
+
+
+def gap_round_off() -> tuple[float, float]:
+    """The relative and absolute round-off of a linearized gap (:func:`round_off_gap`), as
+    :meth:`dda.contact.ContactElement.compiled` takes them (read at each call)."""
+    return GAP_ROUND_OFF, _COORDINATE_ROUND_OFF
 
 
 def _unhold_cycling(held, state, proposed):
