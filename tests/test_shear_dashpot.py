@@ -68,6 +68,30 @@ def test_a_sliding_contact_splits_its_friction_between_spring_and_dashpot():
     assert c.history["slip"][0] == pytest.approx(dgs[0] - elastic, rel=1e-12)
 
 
+def test_the_compiled_end_has_numpys_bits(monkeypatch):
+    """shear_dashpot_end compiled (dda.kernels.dashpot.shear_dashpot_ends) and in numpy, on
+    open, sticking and sliding contacts."""
+    from dda.contact import dashpot
+
+    rng = np.random.default_rng(7)
+    n = 50
+    ends = []
+    for compiled in (True, False):
+        monkeypatch.setattr(dashpot, "SHEAR_END_KERNEL", compiled)
+        state = rng.integers(0, 3, n).astype(np.int8)
+        g, t_s, ps, cs, g0 = (rng.normal(size=n), rng.normal(size=n), rng.uniform(1, 2, n),
+                              rng.uniform(0, 5, n), rng.normal(size=n))
+        z = np.zeros(n, dtype=int)
+        c = ContactSet(z, z, z, z, state, np.zeros(n), np.zeros(n), t_s.copy(),
+                       {"g_se": g.copy(), "slip": np.zeros(n)})
+        shear_dashpot_end(c, ps, cs, g0)
+        ends.append((c.history["g_se"], c.t_s))
+        rng = np.random.default_rng(7)
+    for a, b in zip(*ends, strict=True):
+        np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(ends[0][0], g)  # the closed contacts' springs changed
+
+
 def test_the_option_is_a_bool_and_a_scene_file_key(tmp_path):
     with pytest.raises(TypeError, match="shear_dashpot must be True or False"):
         JointMaterial(1e9, 1e9, CoulombSingle(phi=30.0), shear_dashpot="yes")

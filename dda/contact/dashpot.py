@@ -72,8 +72,15 @@ import math
 
 import numpy as np
 
+from dda.kernels.dashpot import shear_dashpot_ends
+
 __all__ = ["damping_ratio", "contact_mass", "dashpot_stiffness", "shear_dashpot_start",
            "shear_dashpot_end"]
+
+
+SHEAR_END_KERNEL = True
+"""Whether :func:`shear_dashpot_end` runs compiled
+(:func:`dda.kernels.dashpot.shear_dashpot_ends`, the same bits); False: numpy."""
 
 
 def damping_ratio(restitution: float) -> float:
@@ -170,6 +177,12 @@ def shear_dashpot_end(contacts, shear_penalty, shear_dashpot, g_se0) -> None:
     shear_penalty, shear_dashpot : (m,) ``p_s`` and ``c_s / dt``
     g_se0 : (m,) the committed elastic shear displacements at the step's start
     """
+    if SHEAR_END_KERNEL:
+        contacts.history["g_se"], contacts.t_s = shear_dashpot_ends(
+            np.asarray(contacts.state, dtype=np.int8), *(np.ascontiguousarray(
+                a, dtype=np.float64) for a in (contacts.history["g_se"], contacts.t_s,
+                                               shear_penalty, shear_dashpot, g_se0)))
+        return
     closed = contacts.state != 0
     scaled0 = g_se0 * (shear_penalty / (shear_penalty + shear_dashpot))
     g_se = np.where(closed, g_se0 + (contacts.history["g_se"] - scaled0),

@@ -46,6 +46,23 @@ _NO_DAMPING = np.zeros(0)
 KERNEL_LAWS = True
 
 
+_LAST_ONE_LAW = (None, None, -1, None)
+
+
+def _one_law_arrays(law, numbers, m):
+    """``(kind, mu_static, mu_dynamic, cohesion, no face)`` of ``m`` contacts of one law: the
+    arrays of the last call when it was for the same law, numbers and ``m`` (a scene with
+    one law asks for the same ones every step; the kernels only read them)."""
+    global _LAST_ONE_LAW
+    last_law, last_numbers, last_m, arrays = _LAST_ONE_LAW
+    if last_law is law and last_m == m and last_numbers == numbers:
+        return arrays
+    arrays = (np.full(m, numbers[0], dtype=np.int64),
+              *(np.full(m, float(v)) for v in numbers[1:]), np.full(m, -1, dtype=np.int64))
+    _LAST_ONE_LAW = (law, numbers, m, arrays)
+    return arrays
+
+
 @dataclass
 class LawGroups:
     """Contacts grouped by the friction law they share: ``[(law, indices), ...]``.
@@ -87,10 +104,9 @@ class LawGroups:
             numbers = law._kernel_parameters()
             if numbers is None:
                 return None
-            kind = np.full(m, numbers[0], dtype=np.int64)
-            mu_s, mu_d, cohesion = (np.full(m, float(v)) for v in numbers[1:])
+            kind, mu_s, mu_d, cohesion, no_face = _one_law_arrays(law, numbers, m)
             face = (np.asarray(self.faces.index, dtype=np.int64) if law.uses_faces
-                    else np.full(m, -1, dtype=np.int64))
+                    else no_face)
             return kind, mu_s, mu_d, cohesion, face
         kind = np.zeros(m, dtype=np.int64)
         mu_s, mu_d, cohesion = np.zeros(m), np.zeros(m), np.zeros(m)
