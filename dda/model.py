@@ -227,6 +227,12 @@ class Model:
         kernels of :mod:`dda.kernels.blocks`)."""
         return self.damping is None and not len(self.load_block) and not len(self.spring_block)
 
+    @property
+    def moves_known(self) -> bool:
+        """Whether some block's motion is given in time (shaken, or moved in full): without
+        any, the known blocks stand still and a step's known increments are zero."""
+        return bool(self.shakes or self.full_motions)
+
     def block_label(self, i: int) -> str:
         """How messages name block ``i`` (its name, or its index)."""
         return str(self.scene.blocks[int(i)])

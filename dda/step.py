@@ -63,6 +63,8 @@ BLOCK_KERNELS = True
 # them through the constructor and the dashpot kernels
 COMPILED_ELEMENT = True
 
+_NO_MOVES = np.zeros((0, 2))
+
 # the search distance is this multiple of the step's predicted largest vertex displacement
 SEARCH_FACTOR = 2.5
 
@@ -184,12 +186,15 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
         v_eff = state.velocity * carry if carry else None
         k_eff, f_eff = effective_system(k, m, f, v_eff, dt, c)
         speed = None
-    known_u, known_v, shaking = model.known_motion(t1, state.known_u, state.shaking)
     d_known = np.zeros((model.n_blocks, 6))
-    d_known[:, :2] = known_u - state.known_u
-    d_known[model.free] = 0.0
-    d0 = search_distance(model, state, dt, carry, ints.centroid, d_known[~model.free, :2],
-                         search_hint, speed)
+    if model.moves_known:
+        known_u, known_v, shaking = model.known_motion(t1, state.known_u, state.shaking)
+        d_known[:, :2] = known_u - state.known_u
+        d_known[model.free] = 0.0
+        known_du = d_known[~model.free, :2]
+    else:  # the known blocks stand still (the arrays are shared, never changed in place)
+        known_u, known_v, shaking, known_du = state.known_u, None, state.shaking, _NO_MOVES
+    d0 = search_distance(model, state, dt, carry, ints.centroid, known_du, search_hint, speed)
     found = _detect(model, state, d0, settings.penetration_tolerance)
     element = _element(model, state, found, ints, dt if carry else 0.0)
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
@@ -437,7 +442,8 @@ def _advanced(model, state, dt, sol, centroid, ended: _Ended, v_eff, known,
         rotation, centroid_new = ended.rotation, ended.centroid
     if model.rigid is not None:
         vel[model.rigid, 3:] = 0.0
-    vel[~free, :2] = known_v[~free]
+    if known_v is not None:  # (None: the known blocks stand still, their velocity 0)
+        vel[~free, :2] = known_v[~free]
     for mo in model.full_motions:
         vel[mo.block, :2] = d_known[mo.block, :2] / dt
     load_points = state.load_points
