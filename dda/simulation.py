@@ -17,7 +17,7 @@ import numpy as np
 
 from dda._checks import finite_number
 from dda.auto_settings import choose
-from dda.contact.contacts import OPEN, SLIP
+from dda.contact.contacts import SLIP, STICK
 from dda.errors import SimulationError
 from dda.io.checkpoint import (
     CHECKPOINT_VERSION,
@@ -326,11 +326,11 @@ class Simulation:
         control.accepted()
         self.advisor.observe(trial, control.steps, control.contact_cuts)
         c = trial.contacts
+        states = np.bincount(c.state, minlength=3)  # open, stick, slip
         result.stats.append(
             time=trial.time, dt=dt, iterations=report.iterations,
             open_close_passes=report.open_close_passes, contacts=len(c),
-            closed=int(np.count_nonzero(c.state != OPEN)),
-            sliding=int(np.count_nonzero(c.state == SLIP)), retries=tries,
+            closed=int(states[STICK] + states[SLIP]), sliding=int(states[SLIP]), retries=tries,
             wall_time=_time.perf_counter() - start, solves=profile.solves,
             unknowns=report.unknowns, pairs=report.pairs, penetration=report.penetration,
             spring_penetration=report.spring_penetration,

@@ -36,6 +36,7 @@ from dda.contact.detection import (
     broad_phase,
     keep_closed,
     narrow_phase,
+    pairs_with_free_block,
 )
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.penetration import GuardReport, penetration_guard
@@ -297,8 +298,7 @@ def _pairs(model, boxes, margin) -> np.ndarray:
     whose motion is known (fixed, shaken, moved): a contact between them acts on no unknown,
     and its spring (two fixed blocks built touching or overlapping) would only hold
     fictitious energy."""
-    pairs = broad_phase(boxes, margin)
-    return pairs[model.free[pairs[:, 0]] | model.free[pairs[:, 1]]]
+    return pairs_with_free_block(broad_phase(boxes, margin), model.free)
 
 
 def _element(model, state, found: _Detected, ints, dt: float) -> ContactElement:

@@ -100,6 +100,14 @@ def _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom):
         xi0[moved] = geom.xi[moved] - g_s / geom.length[moved]
 
 
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """``numpy.array_equal`` of two index arrays (by their bytes when of one dtype: the
+    cheap test of a small scene's every step)."""
+    if a.dtype == b.dtype and a.shape == b.shape:
+        return a.tobytes() == b.tobytes()
+    return bool(np.array_equal(a, b))
+
+
 def _carried_whole(old, new, x, nxt):
     geom = new.geometry
     if geom is None:
@@ -132,8 +140,7 @@ def carry_over(
     """
     m = len(new)
     n_v = len(x)
-    if (m and len(old) == m and np.array_equal(old.vertex, new.vertex)
-            and np.array_equal(old.edge, new.edge)):
+    if m and len(old) == m and _same(old.vertex, new.vertex) and _same(old.edge, new.edge):
         # the same contacts in the same order (a scene at rest, a slow slide): each keeps all
         # it had, as the matching below would give it
         return _carried_whole(old, new, x, nxt)

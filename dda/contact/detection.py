@@ -175,6 +175,19 @@ def broad_phase(boxes: np.ndarray, margin: float) -> np.ndarray:
     return _broad_phase(np.ascontiguousarray(boxes, dtype=np.float64), float(margin))
 
 
+def pairs_with_free_block(pairs: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """The rows of ``pairs`` (k, 2) with at least one block that is ``free`` (in order)."""
+    return _pairs_with_free_block(pairs, np.asarray(free, dtype=np.bool_))
+
+
+@njit(cache=True)
+def _pairs_with_free_block(pairs, free):
+    keep = np.empty(pairs.shape[0], dtype=np.bool_)
+    for i in range(pairs.shape[0]):
+        keep[i] = free[pairs[i, 0]] or free[pairs[i, 1]]
+    return pairs[keep]
+
+
 @njit(cache=True)
 def _broad_phase(boxes, margin):
     """:func:`broad_phase` compiled: the grown boxes, the axis of larger spread of their

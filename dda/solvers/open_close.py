@@ -354,10 +354,14 @@ def dense_layout(pattern) -> tuple:
     """The dense kernels' layout arguments of a :class:`dda.solvers.linear.SystemPattern`:
     ``n``, where the blocks' and the contacts' 6 x 6 blocks go, the contacts' right-hand side
     rows, and the unknowns solved for (``keep``, ``reduced``)."""
-    keep = pattern.keep
-    return (pattern.n, pattern.block_base, pattern.block_step, pattern.free_blocks,
+    layout = pattern.__dict__.get("_dense_layout")  # (kept with the pattern, across steps)
+    if layout is None:
+        keep = pattern.keep
+        layout = pattern.__dict__["_dense_layout"] = (
+            pattern.n, pattern.block_base, pattern.block_step, pattern.free_blocks,
             pattern.pair_base, pattern.pair_step, pattern.side_row, pattern.side_block,
             _NO_KEEP if keep is None else np.asarray(keep, dtype=np.int64), keep is not None)
+    return layout
 
 
 def pass_rules() -> tuple:
