@@ -100,7 +100,10 @@ def growth_exponent(path: Path) -> dict[str, float]:
     rows = {}
     for line in path.read_text().splitlines():
         cells = [c.strip() for c in line.strip("|").split("|")]
-        if len(cells) > 4 and re.fullmatch(r"[\d,]+", cells[0]):
+        # the first table's rows (blocks, contacts, solver, ms/step, ...); the second table
+        # (passes by the contacts switched) has the solver in its second column
+        if (len(cells) > 4 and re.fullmatch(r"[\d,]+", cells[0])
+                and re.fullmatch(r"[\d,]+", cells[1]) and cells[2] in ("legacy", "newton")):
             rows.setdefault(cells[2], []).append((float(cells[0].replace(",", "")),
                                                   float(cells[3])))
     out = {}
