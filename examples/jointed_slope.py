@@ -6,27 +6,31 @@ into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``)
 thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
 shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 
-With these defaults (0.3 s) the run takes about 40 s on two cores (1,320 steps, 73 of them
-cut because OPEN-CLOSE did not settle in 30 passes, 9.1 passes a step) and the face blocks
-end 22.4 mm (median) and 28.3 mm (most) from where they started relative to the base.
-Without the joints' impact dashpot (``restitution=1``, the default before issue 20's last
-part) it took 44 s (1,852 steps, 64 cut, 6.7 passes a step) and they moved 25.1 / 43.7 mm;
-before that, 1,778 steps, 55 cut, 25.5 / 51.3 mm before a sunk corner kept its closed
-contact's edge, 1,654 steps, 68 cut, 27 / 51 mm before the sparse structure was kept from
-step to step (the solves' round-off), and 1,566 steps, 53 cut, 24 / 42 mm before detection
-judged "sunk" corners by their own pair's blocks. The
-contacts settle only at a fraction of the 2e-3 s asked for (the contact period of a 1 x 1.6 m
-block is 1.8 ms, of the lightest block, 185 kg, 0.4 ms): the steps average 2.3e-4 s
-(1.6e-4 without the dashpot). Without the dashpot, asked
-for dt 1.25e-4 the face moved 25 / 41 mm, for 6.25e-5, 30 / 60 mm (issue 19's third part).
-The penalty (5e10 N/m, 540 times the lightest block's inertia at 2e-3 s) is stiff for dt, and
-``dda.PenaltyWarning`` says so after 20 cuts.
+With these defaults (0.3 s) the run takes about 60 s (1,984 steps, 83 of them cut because
+OPEN-CLOSE did not settle in 30 passes, 8.0 passes a step) and the face blocks end 23.0 mm
+(median) and 28.0 mm (most) from where they started relative to the base. Without the joints'
+shear dashpot (``JointMaterial(shear_dashpot=False)``, the default before issue 20's last
+commit) 1,834 steps, 82 cut, 23.3 / 30.2 mm, and 24% less CPU (the numbers from here on are
+without it, and from earlier machines: before it, 1,320 steps, 73 cut, 22.4 / 28.3 mm on the
+machine of issue 19's thirteenth part). Without the joints' impact dashpot (``restitution=1``,
+the default before issue 20's last part) it took 44 s (1,852 steps, 64 cut, 6.7 passes a step)
+and they moved 25.1 / 43.7 mm; before that, 1,778 steps, 55 cut, 25.5 / 51.3 mm before a sunk
+corner kept its closed contact's edge, 1,654 steps, 68 cut, 27 / 51 mm before the sparse
+structure was kept from step to step (the solves' round-off), and 1,566 steps, 53 cut, 24 / 42
+mm before detection judged "sunk" corners by their own pair's blocks. The contacts settle only
+at a fraction of the 2e-3 s asked for (the contact period of a 1 x 1.6 m block is 1.8 ms, of
+the lightest block, 185 kg, 0.4 ms): the steps average 2.3e-4 s (1.6e-4 without the dashpot).
+Without the dashpot, asked for dt 1.25e-4 the face moved 25 / 41 mm, for 6.25e-5, 30 / 60 mm
+(issue 19's third part). The penalty (5e10 N/m, 540 times the lightest block's inertia at 2e-3
+s) is stiff for dt, and ``dda.PenaltyWarning`` says so after 20 cuts.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``): blocks carry
 blocks here, so the penalty is twice the rock's Young's modulus, 2e10 N/m, at dt 2.4e-4 s (3
-times the lightest block's inertia), for both solvers. After 0.3 s the face blocks moved 26.3 /
-33.1 mm (legacy, 32 s, 1,354 steps, 10 cut) and 24.3 / 36.4 mm (Newton, 61 s, 1,560 steps,
-17 cut, 2.2 iterations a step); without the impact dashpot 26.5 / 36.7 mm (legacy, 28 s,
+times the lightest block's inertia), for both solvers. After 0.3 s the face blocks moved 23.2 /
+28.5 mm (legacy, 32 s, 1,379 steps, 16 cut) and 23.8 / 31.1 mm (Newton, 57 s, 1,713 steps,
+18 cut); without the shear dashpot 26.0 / 35.0 mm (legacy, 1,382 steps, 17 cut) and 24.0 /
+33.0 mm (Newton, 1,508 steps, 8 cut) (on the machine before, 26.3 / 33.1 and 24.3 / 36.4 mm
+in 1,354 and 1,560 steps); without the impact dashpot 26.5 / 36.7 mm (legacy, 28 s,
 1,298 steps, 4 cut) and 27.6 / 41.3 mm (Newton, 44 s, 1,389 steps, 8 cut, 1.1 iterations a
 step), and before the sparse structure was kept from step to step, 25.8 / 41.7 and 27.1 /
 43.6 mm in the same steps: this slope is chaotic at the millimetre. (Wall times of the two
