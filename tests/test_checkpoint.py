@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import dda
+from dda.plot import read_pvd
 from tests import checkpoint_scene as cs
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -89,6 +90,45 @@ def test_killed_process_keeps_its_files_and_resumes(tmp_path, uninterrupted, sig
     files = sorted(tmp_path.glob("case_*.vtu"))
     assert len(files) == STEPS + 1  # the start and every step, each once
     assert (tmp_path / "case.pvd").read_text().count("<DataSet") == STEPS + 1
+
+
+def test_a_killed_run_leaves_an_index_of_its_frames(tmp_path):
+    """SIGKILL, which no handler sees, mid-run: the .pvd index lists every VTU file on disk
+    (but at most the last one, killed between its file and its entry), and it parses."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen(
+        [sys.executable, "-c", "from tests.checkpoint_scene import main; main()",
+         str(tmp_path)], cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        text=True)
+    for line in proc.stdout:
+        if int(line.split()[1]) >= 73:
+            proc.kill()
+            break
+    proc.communicate(timeout=60)
+    assert proc.returncode == -signal.SIGKILL
+    files = sorted(p.name for p in tmp_path.glob("case_*.vtu"))
+    assert len(files) >= 73
+    listed = [p.name for _, p in read_pvd(tmp_path / "case.pvd")]
+    assert listed == files or listed == files[:-1], (len(listed), len(files))
+
+
+def test_the_index_grows_in_place_and_is_rewritten_when_not_its_own(tmp_path):
+    """Each frame's entry is added as it is written; an index changed behind the writer's
+    back, or a writer that comes back from a checkpoint, rewrites it whole."""
+    import pickle
+
+    sim = cs.simulation()
+    writer = dda.io.VTUWriter(tmp_path / "case")
+    for k in range(3):
+        writer.write(sim.frame())
+        assert len(read_pvd(writer.pvd_path)) == k + 1
+    writer.pvd_path.write_text(writer.pvd_path.read_text() + "\n")  # not as it left it
+    writer.write(sim.frame())
+    assert len(read_pvd(writer.pvd_path)) == 4
+    again = pickle.loads(pickle.dumps(writer))  # a resumed run's writer
+    again.write(sim.frame())
+    names = [p.name for _, p in read_pvd(writer.pvd_path)]
+    assert names == [f"case_{i:05d}.vtu" for i in range(5)]
 
 
 def test_checkpoint_needs_a_picklable_scene(tmp_path):

@@ -8,7 +8,11 @@ Each .vtu holds
   (compression positive, N/m), ``shear_force`` (N/m) and ``contact_state`` (1 stick, 2 slip).
 Block fields are NaN on contact cells and contact fields NaN on block cells; ``kind`` is 0 on
 blocks and 1 on contacts, so a Threshold filter in ParaView separates them.
-Files are written to a temporary name and renamed, so a reader never sees half a file.
+Files are written to a temporary name and renamed, so a reader never sees half a file. The
+.pvd index gains each frame's entry as soon as its file is in place (its closing tags
+rewritten in one write; the whole index rewritten, atomically, when it does not end as this
+writer left it and when the run ends), so the folder of a killed run opens with every frame
+but at most the last one.
 """
 
 from __future__ import annotations
@@ -86,26 +90,54 @@ class VTUWriter:
             del self._entries[n:]  # an entry left by an interrupted write
             self._entries.append((frame.time, name))
             n += 1
+            self._n, self._seen, self.last_time = n, self._seen + 1, frame.time
+            self._index_last()
+            return
         self._n, self._seen, self.last_time = n, self._seen + 1, frame.time
-        if self._seen % (50 * self.every) == 1:
-            self._write_pvd()
 
     def close(self) -> None:
         """Write the .pvd index of every file written."""
         self._write_pvd()
 
+    def __getstate__(self):
+        state = self.__dict__.copy()
+        state.pop("_pvd_end", None)  # where this process left the index: not for a resume
+        return state
+
+    def _index_last(self):
+        """Add the last entry to the .pvd index in place: its line and the closing tags
+        written over the old closing tags, in one write (a whole rewrite, atomic, when the
+        index is not the one this writer left)."""
+        end = self.__dict__.get("_pvd_end")  # (entries, offset of the closing tags)
+        path = self.pvd_path
+        if end is None or end[0] != self._n - 1 or not path.is_file() or (
+                path.stat().st_size != end[1] + len(_CLOSING)):
+            self._write_pvd()
+            return
+        line = _dataset(*self._entries[self._n - 1]).encode()
+        with open(path, "r+b") as f:
+            f.seek(end[1])
+            f.write(line + _CLOSING)
+        self._pvd_end = (self._n, end[1] + len(line))
+
     def _write_pvd(self):
-        lines = ['<?xml version="1.0"?>',
-                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
-                 "  <Collection>"]
-        for t, name in self._entries[:self._n]:
-            lines.append(
-                f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(name)}/>'
-            )
-        lines += ["  </Collection>", "</VTKFile>", ""]
+        head = ('<?xml version="1.0"?>\n'
+                '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+                "  <Collection>\n")
+        body = "".join(_dataset(t, name) for t, name in self._entries[:self._n])
+        data = (head + body).encode()
         tmp = self.pvd_path.with_name(self.pvd_path.name + ".tmp")
-        tmp.write_text("\n".join(lines))
+        tmp.write_bytes(data + _CLOSING)
         os.replace(tmp, self.pvd_path)
+        self._pvd_end = (self._n, len(data))
+
+
+_CLOSING = b"  </Collection>\n</VTKFile>\n"
+
+
+def _dataset(t: float, name: str) -> str:
+    """One entry of the .pvd index."""
+    return f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(name)}/>\n'
 
 
 def frame_to_mesh(frame: Frame) -> meshio.Mesh:
