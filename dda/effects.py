@@ -137,6 +137,17 @@ class AccelerationHistory:
         self._disp = np.concatenate([np.zeros((1, 2)), np.cumsum(du, axis=0)])
 
     @property
+    def function(self):
+        """The callable ``t -> (ax, ay)`` of the history, or None for a record."""
+        return self._callable
+
+    @property
+    def record(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(times, values)`` of a recorded history ((n,), (n, 2); starting at t = 0), or
+        None for a callable."""
+        return None if self._callable is not None else (self._times, self._acc)
+
+    @property
     def end_time(self) -> float:
         """Last time the history covers (inf for a callable)."""
         return np.inf if self._callable is not None else float(self._times[-1])
@@ -247,6 +258,11 @@ class DisplacementHistory:
                 f"{first!r}"
             )
 
+    @property
+    def function(self):
+        """The callable ``t -> (ux, uy)``."""
+        return self._f
+
     def __call__(self, t: float) -> np.ndarray:
         items = list(self._f(t))
         mask = np.array([v is not None for v in items])
@@ -276,6 +292,16 @@ class LoadHistory:
     @property
     def constant(self) -> bool:
         return self._f is None
+
+    @property
+    def function(self):
+        """The callable ``t -> (fx, fy)``, or None for a constant force."""
+        return self._f
+
+    @property
+    def value(self) -> np.ndarray | None:
+        """The constant force, or None for a callable."""
+        return None if self._f is not None else self._value
 
     def __call__(self, t: float) -> np.ndarray:
         if self._f is None:

@@ -388,6 +388,11 @@ class Scene:
         return tuple(self._loads)
 
     @property
+    def damping_settings(self) -> tuple:
+        """The :meth:`set_damping` calls in order: blocks (None: all), mass, stiffness."""
+        return tuple(self._damping)
+
+    @property
     def default_joint(self) -> JointMaterial | None:
         """The joint of every pair that has none of its own."""
         return self._joints.default
