@@ -207,7 +207,9 @@ class Simulation:
         checkpoint : str or Path, optional
             File kept (:mod:`dda.io.checkpoint`) every ``checkpoint_every`` steps, on Ctrl-C
             or SIGTERM and at the end, for :meth:`resume`; the scene's callables must be
-            module-level functions. A resumed run keeps its file unless given another.
+            module-level functions (kept by import path) or samples
+            (:class:`dda.effects.TimeTable`). A resumed run keeps its file unless given
+            another.
         checkpoint_every : int
             Steps between checkpoints.
         callback : callable, optional
@@ -353,8 +355,10 @@ class Simulation:
 
         ``Simulation.resume(path).run()`` finishes the interrupted run: same steps, same
         numbers as a run that was never interrupted, and the same writer goes on numbering its
-        files where the checkpoint left it. Only resume files you wrote yourself: a
-        checkpoint is a pickle.
+        files where the checkpoint left it. A checkpoint is data, not a pickle
+        (:mod:`dda.io.checkpoint`): reading one imports the modules of the laws and functions
+        it names and runs nothing else, and a file that is not a checkpoint of this version
+        gives a ``ValueError`` that says why.
         """
         data = read_checkpoint(path)
         sim = data["simulation"]

@@ -52,14 +52,17 @@ class Announce(dda.io.VTUWriter):
         time.sleep(0.01)
 
 
-class InterruptOnce:
-    """A writer that interrupts the run (as Ctrl-C would) at its ``at``-th frame, once."""
+class InterruptOnce(dda.io.VTUWriter):
+    """A writer that writes nothing and interrupts the run (as Ctrl-C would) at its
+    ``at``-th frame, once (a VTU writer, which is what a checkpoint keeps)."""
 
-    def __init__(self, at):
+    def __init__(self, at, prefix):
+        super().__init__(prefix)
         self.at, self.seen, self.armed = at, 0, True
 
     def write(self, frame):
         self.seen += 1
+        self.last_time = frame.time
         if self.armed and self.seen == self.at:
             self.armed = False
             raise KeyboardInterrupt

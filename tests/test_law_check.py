@@ -153,3 +153,24 @@ def test_coulomb_like_needs_only_the_strength():
     check_friction_law(Capped())
     with pytest.raises(AssertionError, match="d t_s / d g_n of a slipping contact"):
         check_friction_law(CappedWrongSlope())
+
+
+class Forgetful(CoulombLike):
+    """A law that keeps mu but not its constructor's ``angle``: no checkpoint can rebuild it."""
+
+    name = "forgetful"
+
+    def __init__(self, angle):
+        self.mu = float(np.tan(np.radians(angle)))
+
+    def strength(self, t_n, length, history=None):
+        return np.maximum(-t_n, 0.0) * self.mu
+
+    def strength_slope(self, t_n, length, history=None):
+        return self.mu
+
+
+def test_a_law_that_forgets_its_parameters_is_found():
+    with pytest.raises(AssertionError, match=r"does not keep its constructor parameter\(s\) "
+                                             r"\['angle'\]"):
+        check_friction_law(Forgetful(30.0))

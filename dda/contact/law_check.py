@@ -3,8 +3,9 @@
 :func:`check_friction_law` samples contacts that stick and contacts that slip, fresh and with a
 history, and checks what the solvers rely on: the consistent tangent against central finite
 differences, a committed history that no trial touches, results that do not depend on how
-many contacts are evaluated together, the stick branch, and a law that survives pickling
-(checkpoints and parallel sweeps copy it).
+many contacts are evaluated together, the stick branch, a law that survives pickling
+(parallel sweeps copy it), and one rebuilt from its constructor's parameters, kept as its
+attributes, that gives the same forces (checkpoints keep it so).
 """
 
 from __future__ import annotations
@@ -81,6 +82,7 @@ def check_friction_law(law, *, normal_forces=(1e2, 1e6), normal_penalty: float =
             "check_friction_law normal_forces where the law does both")
     _check_untouched_contacts(law, used, pn, ps, length)
     _check_pickle(law, used, t_n, ps, length)
+    _check_rebuilt(law, used, t_n, ps, length)
 
 
 def _check_untouched_contacts(law, committed, pn, ps, length):
@@ -220,12 +222,32 @@ def _check_tangent(law, committed, dgs, t_n, pn, ps, length, trial, rtol):
     return np.array([np.count_nonzero(smooth & ~slipping), np.count_nonzero(smooth & slipping)])
 
 
+def _check_rebuilt(law, committed, t_n, ps, length):
+    """The law rebuilt from its constructor's parameters, read back as its attributes of the
+    same names, gives the same forces (how a checkpoint keeps a law, with its class's
+    import path: :func:`dda.io.scene_data.law_to_data`)."""
+    from dda.registry import parameters
+
+    cls = type(law)
+    missing = [p for p in parameters(cls) if not hasattr(law, p)]
+    _assert(not missing,
+            f"{law!r} does not keep its constructor parameter(s) {missing} as attributes of "
+            "the same names; a checkpoint rebuilds a law from them")
+    copy_ = cls(**{p: getattr(law, p) for p in parameters(cls)})
+    dgs = 2.0 * -t_n / ps
+    a = _return_map(law, committed, dgs, t_n, ps, length)
+    b = _return_map(copy_, committed, dgs, t_n, ps, length)
+    _assert(np.array_equal(a.t_s, b.t_s) and np.array_equal(a.slipping, b.slipping),
+            f"{law!r}: the law rebuilt from its parameters (as a checkpoint rebuilds it) gives "
+            "other forces than the law")
+
+
 def _check_pickle(law, committed, t_n, ps, length):
     try:
         copy_ = pickle.loads(pickle.dumps(law))
     except Exception as exc:  # pickle raises several types
         raise AssertionError(f"{law!r} cannot be pickled ({type(exc).__name__}: {exc}); "
-                             "checkpoints and parallel sweeps copy laws by pickling") from None
+                             "parallel sweeps copy laws by pickling") from None
     dgs = 2.0 * -t_n / ps
     a = _return_map(law, committed, dgs, t_n, ps, length)
     b = _return_map(copy_, committed, dgs, t_n, ps, length)

@@ -77,7 +77,7 @@ class ArrayStore:
 def function_path(f, where: str) -> str:
     """``"module:qualname"`` of a plain module-level function, which :func:`resolve_function`
     gives back; :class:`SceneDataError` for anything else."""
-    hint = (f"{where}: a checkpoint names functions by their import path; define it at the "
+    hint = ("A checkpoint names functions by their import path; define it at the "
             "top level of a module you can import (not in the script run as a program, not "
             "as a lambda or inside another function), or give the history as samples "
             "(dda.effects.TimeTable, or times and values for shaking)")
