@@ -27,7 +27,7 @@ from dda.io.checkpoint import (
 )
 from dda.model import Model
 from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning
-from dda.profiling import SECTIONS, StepProfile
+from dda.profiling import StepProfile
 from dda.progress import ProgressBar
 from dda.recorder import Recorder, frame
 from dda.result import Frame, Result
@@ -41,7 +41,6 @@ from dda.step_control import StepControl
 __all__ = ["Simulation", "SimulationError", "PenaltyWarning", "CHECKPOINT_VERSION"]
 
 #: the stats columns of the step profile's sections, in its order
-_SECTION_FIELDS = tuple(f"{name}_time" for name in SECTIONS)
 
 
 class Simulation:
@@ -232,7 +231,8 @@ class Simulation:
         t_end, writer, checkpoint = self._prepare(duration, output, checkpoint,
                                                   checkpoint_every)
         bar = self._progress_bar(progress, t_end)
-        result = Result(self.scene, [b.name for b in self.scene.blocks])
+        result = Result(self.scene, [b.name for b in self.scene.blocks],
+                        record_every=self.record_every)
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)
         watchers = [w for w in (bar, callback) if w is not None]
@@ -329,16 +329,13 @@ class Simulation:
         self.advisor.observe(trial, control.steps, control.contact_cuts)
         c = trial.contacts
         states = np.bincount(c.state, minlength=3)  # open, stick, slip
-        result.stats.append(
-            time=trial.time, dt=dt, iterations=report.iterations,
-            open_close_passes=report.open_close_passes, contacts=len(c),
-            closed=int(states[STICK] + states[SLIP]), sliding=int(states[SLIP]), retries=tries,
-            wall_time=_time.perf_counter() - start, solves=profile.solves,
-            unknowns=report.unknowns, pairs=report.pairs, penetration=report.penetration,
-            spring_penetration=report.spring_penetration,
-            residual_norms=report.residual_norms,
-            **dict(zip(_SECTION_FIELDS, profile.seconds.values(), strict=True)),
-        )
+        # the row in StepStats.FIELDS order (the parts' seconds in SECTIONS order)
+        result.stats.append_row(
+            (trial.time, dt, report.iterations, report.open_close_passes, len(c),
+             int(states[STICK] + states[SLIP]), int(states[SLIP]), tries,
+             _time.perf_counter() - start, profile.solves, report.unknowns, report.pairs,
+             report.penetration, report.spring_penetration, *profile.seconds.values()),
+            report.residual_norms)
         return report
 
     # ------------------------------------------------------------------ checkpoints
