@@ -22,10 +22,10 @@ import numpy as np
 __all__ = ["main"]
 
 
-def _run_scene(path, out, duration, progress):
+def _run_scene(path, out, duration, progress, outside=False):
     from dda.io.scene_file import load_scene
 
-    loaded = load_scene(path)
+    loaded = load_scene(path, allow_outside_output=outside)
     if out is None and loaded.output_dir is None:
         out = Path("out") / Path(path).stem
     writer = loaded.writer(out)
@@ -47,10 +47,10 @@ def _run_scene(path, out, duration, progress):
     return result
 
 
-def _resume(path, duration, progress):
+def _resume(path, duration, progress, outside=False):
     from dda.simulation import Simulation
 
-    sim = Simulation.resume(path)
+    sim = Simulation.resume(path, allow_outside_output=outside)
     print(f"{path}: resuming at t = {sim.committed.time:g} s")
     result = sim.run(duration, progress=progress)
     print(result.stats.summary())
@@ -74,9 +74,10 @@ def cmd_run(args):
     if path.suffix == ".py":
         _run_script(path, args.out)
     elif path.suffix == ".ckpt":
-        _resume(path, args.duration, _progress(args))
+        _resume(path, args.duration, _progress(args), args.allow_outside_output)
     else:
-        _run_scene(path, args.out, args.duration, _progress(args))
+        _run_scene(path, args.out, args.duration, _progress(args),
+                   args.allow_outside_output)
     return 0
 
 
@@ -168,6 +169,10 @@ def main(argv=None) -> int:
                    "out/NAME)")
     p.add_argument("--duration", type=float, help="simulated time (s), overrides the file's")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--allow-outside-output", action="store_true",
+                   help="let a scene file's [output] dir be absolute or climb out of the "
+                   "file's folder with '..', and a resumed checkpoint write its VTU series "
+                   "outside the checkpoint's folder (both refused by default)")
     p.set_defaults(func=cmd_run)
     p = sub.add_parser("demo", help="run a shaken stack of blocks (writes out/demo)")
     p.add_argument("--out", help="output folder")

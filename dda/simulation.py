@@ -347,7 +347,7 @@ class Simulation:
         write_checkpoint(path, checkpoint_payload(self, writer, end, path, every))
 
     @classmethod
-    def resume(cls, path) -> Simulation:
+    def resume(cls, path, allow_outside_output: bool = False) -> Simulation:
         """The simulation kept in a checkpoint file of :meth:`run`, ready to go on.
 
         ``Simulation.resume(path).run()`` finishes the interrupted run: same steps, same
@@ -355,9 +355,12 @@ class Simulation:
         files where the checkpoint left it. A checkpoint is data, not a pickle
         (:mod:`dda.io.checkpoint`): reading one imports the modules of the laws and functions
         it names and runs nothing else, and a file that is not a checkpoint of this version
-        gives a ``ValueError`` that says why.
+        gives a ``ValueError`` that says why. The run goes on checkpointing to ``path``,
+        and its VTU series where it was if that was in ``path``'s folder (or below it); one
+        that was elsewhere needs ``allow_outside_output`` (a checkpoint from someone else
+        writes nowhere but beside itself).
         """
-        data = read_checkpoint(path)
+        data = read_checkpoint(path, allow_outside_output)
         sim = data["simulation"]
         sim.output = data["writer"]
         sim._resume_end = data["end"]

@@ -88,9 +88,12 @@ def test_a_header_with_the_version_and_nothing_else(tmp_path):
     (lambda h: h["simulation"]["solver"].update(name="os:system"), "not a subclass"),
     (lambda h: h["scene"]["joints"]["default"]["friction"].update(law="subprocess:Popen"),
      "not a subclass"),
-    (lambda h: h.update(writer={"class": "subprocess:Popen", "prefix": "x", "every": 1,
-                                "entries": [], "n": 0, "seen": 0, "last_time": None,
-                                "extra": {}}), "not a dda.io.VTUWriter"),
+    (lambda h: h.update(writer={"class": "subprocess:Popen", "prefix": "x", "inside": "x",
+                                "every": 1, "entries": [], "n": 0, "seen": 0,
+                                "last_time": None, "extra": {}}), "not a dda.io.VTUWriter"),
+    (lambda h: h["writer"].update(inside="../../elsewhere/case"), "not a path inside"),
+    (lambda h: h["writer"].update(inside=None, prefix="/tmp/elsewhere/case"),
+     "outside the checkpoint's folder"),
     (lambda h: h["state"].update(time="0; import os"), "state.time: not a number"),
     (lambda h: h.update(version=4), "layout 4"),
     (lambda h: h.update(extra=1), "unknown"),
@@ -139,3 +142,31 @@ def test_a_checkpoint_resumes_in_another_process_and_folder(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "resuming at t = 0.02 s" in done.stdout
     assert dda.Simulation.resume(path).state.time == pytest.approx(0.03)
+
+
+def test_a_resumed_run_writes_only_beside_its_checkpoint(tmp_path):
+    """The file's own idea of where its checkpoint goes is not followed: the resumed run
+    checkpoints to the file it was resumed from; a VTU series written outside the
+    checkpoint's folder goes on there only when asked."""
+    path = tmp_path / "run.ckpt"
+    sim = dda.Simulation(cs.build_scene(), dt=cs.DT, solver=dda.solvers.LegacyPullBack(),
+                         output=dda.io.VTUWriter(tmp_path / "out" / "case"))
+    sim.run(0.01, checkpoint=path)
+    victim = tmp_path / "elsewhere" / "important.txt"
+    victim.parent.mkdir()
+    victim.write_text("keep me")
+    edited = _edit(path, lambda h: h.update(checkpoint=[str(victim), 1]))
+    resumed = dda.Simulation.resume(edited)
+    resumed.run(0.01)
+    assert victim.read_text() == "keep me"
+    assert dda.Simulation.resume(edited).state.time == pytest.approx(0.02)
+    assert (tmp_path / "out" / "case_00010.vtu").is_file()  # the series went on beside it
+
+    outside = dda.io.VTUWriter(tmp_path / "series" / "case")
+    sim = dda.Simulation(cs.build_scene(), dt=cs.DT, output=outside)
+    ckpt = tmp_path / "ckpts" / "run.ckpt"
+    sim.run(0.01, checkpoint=ckpt)
+    with pytest.raises(ValueError, match="allow_outside_output=True"):
+        dda.Simulation.resume(ckpt)
+    assert dda.Simulation.resume(ckpt, allow_outside_output=True).output.prefix == (
+        tmp_path / "series" / "case")

@@ -365,3 +365,55 @@ def test_a_restitution_outside_0_to_1_names_its_line(tmp_path):
     text = FULL.replace("restitution = 0.2", "restitution = 1.5")
     with pytest.raises(SceneFileError, match=r"joints\.pair\[0\].*restitution must be between"):
         load_scene(write(tmp_path, text))
+
+
+@pytest.mark.parametrize("line, message", [
+    ('dir = "../../escaped"', "goes up out of the folder with '..'"),
+    ('dir = "/tmp/dda-escaped"', "is an absolute path"),
+    ('dir = "out/../../escaped"', "goes up out of the folder"),
+    ('prefix = "../../escaped/x"', "must be a file name"),
+    ('prefix = "sub/x"', "must be a file name"),
+    ('checkpoint = "../run.ckpt"', "must be a file name"),
+    ('checkpoint = ".."', "must be a file name"),
+])
+def test_a_scene_files_output_stays_in_its_folder(tmp_path, line, message):
+    """A scene file from someone else writes nowhere but in its own folder (issue 21)."""
+    key = line.split(" =")[0]
+    text = FULL.replace('prefix = "full"', line if key == "prefix" else
+                        f'prefix = "full"\n{line}')
+    with pytest.raises(SceneFileError, match=message) as info:
+        load_scene(write(tmp_path, text))
+    assert f"output.{key}" in str(info.value)
+    if key == "dir":
+        assert "--allow-outside-output" in str(info.value)
+
+
+def test_a_link_that_leads_out_is_refused_and_the_option_allows_it(tmp_path):
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    scene_dir = tmp_path / "scene"
+    scene_dir.mkdir()
+    (scene_dir / "link").symlink_to(outside, target_is_directory=True)
+    text = FULL.replace('prefix = "full"', 'prefix = "full"\ndir = "link/out"')
+    path = write(scene_dir, text)
+    with pytest.raises(SceneFileError, match="leads out of the scene file's folder"):
+        load_scene(path)
+    assert load_scene(path, allow_outside_output=True).output_dir == scene_dir / "link/out"
+    inside = load_scene(write(scene_dir, FULL.replace('prefix = "full"',
+                                                      'prefix = "full"\ndir = "a/b"')))
+    assert inside.output_dir == scene_dir / "a/b"
+
+
+def test_the_command_needs_the_option_to_write_outside(tmp_path, capsys):
+    from dda.cli import main
+
+    text = TABLES.replace('prefix = "tables"', 'prefix = "tables"\ndir = "../elsewhere"')
+    scene_dir = tmp_path / "scene"
+    scene_dir.mkdir()
+    f = write(scene_dir, text)
+    assert main(["run", str(f), "--duration", "0.002", "--no-progress"]) == 2
+    assert "goes up out of the folder" in capsys.readouterr().err
+    assert not (tmp_path / "elsewhere").exists()
+    assert main(["run", str(f), "--duration", "0.002", "--no-progress",
+                 "--allow-outside-output"]) == 0
+    assert (tmp_path / "elsewhere" / "tables.pvd").is_file()

@@ -72,7 +72,7 @@ def checkpoint_payload(simulation, writer, end: float, path, every: int) -> byte
             "state": _state_to_data(simulation.committed, store),
             "control": asdict(simulation.control),
             "warned": sorted(simulation.advisor.warned),
-            "writer": _writer_to_data(writer),
+            "writer": _writer_to_data(writer, Path(path)),
             "written": _written_to_data(simulation._written, writer),
             "end": float(end), "checkpoint": [str(path), int(every)],
         }
@@ -149,7 +149,7 @@ def _state_to_data(state, store) -> dict:
             "history": sorted(c.history), "shaking": shaking}
 
 
-def _writer_to_data(writer) -> dict | None:
+def _writer_to_data(writer, checkpoint: Path) -> dict | None:
     from dda.io.vtu import VTUWriter
 
     if writer is None:
@@ -167,7 +167,12 @@ def _writer_to_data(writer) -> dict | None:
     for k, v in state.items():
         if k not in _WRITER_FIELDS:
             extra[k] = _plain(v, f"its writer's attribute {k!r}")
+    inside = None  # the prefix relative to the checkpoint's folder, when it is in it
+    rel = os.path.relpath(os.path.abspath(writer.prefix), os.path.abspath(checkpoint.parent))
+    if ".." not in Path(rel).parts and not os.path.isabs(rel):
+        inside = Path(rel).as_posix()
     return {"class": f"{cls.__module__}:{cls.__qualname__}", "prefix": str(writer.prefix),
+            "inside": inside,
             "every": int(writer.every),
             "entries": [[float(t), str(name)] for t, name in writer._entries],
             "n": int(writer._n), "seen": int(writer._seen),
@@ -184,14 +189,20 @@ def _written_to_data(written, writer) -> dict | None:
 
 
 # ---------------------------------------------------------------------- reading
-def read_checkpoint(path) -> dict:
-    """The checkpoint's contents: ``simulation``, ``writer``, ``end`` and ``checkpoint``."""
+def read_checkpoint(path, allow_outside_output: bool = False) -> dict:
+    """The checkpoint's contents: ``simulation``, ``writer``, ``end`` and ``checkpoint``.
+
+    The run goes on writing its checkpoint to ``path`` (not to where the file says it was
+    written), and its VTU series where it was, relative to ``path``'s folder: a writer whose
+    files were not in that folder (or below it) is refused unless ``allow_outside_output``,
+    so a checkpoint from someone else writes nowhere but beside itself."""
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"Simulation.resume: no checkpoint file {path}")
     try:
         header, store = _open(path)
-        return _restore(header, store)
+        data = _restore(header, store, path, allow_outside_output)
+        return data
     except CheckpointError as exc:
         raise ValueError(f"Simulation.resume: {path}: {exc}") from None
     except SceneDataError as exc:
@@ -233,7 +244,7 @@ def _open(path: Path):
     return header, store
 
 
-def _restore(header: dict, store: ArrayStore) -> dict:
+def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict:
     from dda.simulation import Simulation
 
     scene = scene_from_data(header["scene"], store)
@@ -266,7 +277,7 @@ def _restore(header: dict, store: ArrayStore) -> dict:
     if not (isinstance(warned, list) and all(w in ("soft", "stiff") for w in warned)):
         raise CheckpointError("warned: not a list of the penalty advice's warnings")
     sim.advisor.warned = set(warned)
-    writer = _writer(header["writer"])
+    writer = _writer(header["writer"], path, outside)
     sim._written = _written(header["written"], writer)
     end = header["end"]
     ck = header["checkpoint"]
@@ -275,7 +286,7 @@ def _restore(header: dict, store: ArrayStore) -> dict:
                     and isinstance(ck[1], int) and not isinstance(ck[1], bool) and ck[1] >= 1)):
         raise CheckpointError("end / checkpoint: not a time and [path, every]")
     return {"simulation": sim, "writer": writer, "end": float(end),
-            "checkpoint": (ck[0], ck[1])}
+            "checkpoint": (str(path), ck[1])}
 
 
 def _expect(data, where: str, keys: set) -> dict:
@@ -365,14 +376,14 @@ def _control(data, initial):
     return StepControl(**data)
 
 
-def _writer(data):
+def _writer(data, checkpoint: Path, outside: bool):
     from dda.io.vtu import VTUWriter
     from dda.registry import RegistryError, import_class
 
     if data is None:
         return None
-    _expect(data, "writer", {"class", "prefix", "every", "entries", "n", "seen", "last_time",
-                             "extra"})
+    _expect(data, "writer", {"class", "prefix", "inside", "every", "entries", "n", "seen",
+                             "last_time", "extra"})
     try:
         cls = import_class(data["class"]) if isinstance(data["class"], str) else None
     except (RegistryError, ImportError) as exc:
@@ -390,10 +401,11 @@ def _writer(data):
             and ints[0] >= 1 and ints[1] <= len(entries)
             and isinstance(data["extra"], dict)):
         raise CheckpointError("writer: its fields are not a VTU writer's")
+    prefix = _writer_prefix(data, checkpoint, outside)
     writer = cls.__new__(cls)  # its state set as it was, without running its __init__
     writer.__dict__.update({k: v for k, v in data["extra"].items()
                             if isinstance(k, str) and not k.startswith("_")})
-    writer.prefix = Path(data["prefix"])
+    writer.prefix = prefix
     writer.every = ints[0]
     writer._entries = [(float(t), name) for t, name in entries]
     writer._n, writer._seen = ints[1], ints[2]
@@ -401,6 +413,29 @@ def _writer(data):
     writer.last_time = None if last is None else float(last)
     writer.prefix.parent.mkdir(parents=True, exist_ok=True)
     return writer
+
+
+def _writer_prefix(data, checkpoint: Path, outside: bool) -> Path:
+    """Where the resumed writer's files go: in the checkpoint's folder as they were; a
+    writer that was outside it only with ``outside``."""
+    inside = data["inside"]
+    if inside is not None:
+        rel = Path(inside) if isinstance(inside, str) else None
+        if (rel is None or rel.is_absolute() or rel.drive or ".." in rel.parts
+                or not rel.parts):
+            raise CheckpointError(f"writer: {inside!r} is not a path inside the checkpoint's "
+                                  "folder")
+        folder = checkpoint.parent.resolve()
+        prefix = checkpoint.parent / rel
+        if folder not in prefix.parent.resolve().parents and prefix.parent.resolve() != folder:
+            raise CheckpointError(f"writer: {inside!r} leads out of the checkpoint's folder")
+        return prefix
+    if not outside:
+        raise CheckpointError(
+            f"its VTU series was written to {data['prefix']!r}, outside the checkpoint's folder; "
+            "resume with Simulation.resume(path, allow_outside_output=True) (dda run "
+            "--allow-outside-output) to go on writing there")
+    return Path(data["prefix"])
 
 
 def _written(data, writer):

@@ -83,7 +83,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     [output]
     prefix = "case"                       # files OUT/case_00000.vtu ... and OUT/case.pvd
     every = 10                            # write every 10th recorded step
-    dir = "out"                           # relative to the scene file; --out overrides
+    dir = "out"                           # inside the scene file's folder; --out overrides
     checkpoint = "case.ckpt"              # optional, in the output folder; resume with
     checkpoint_every = 100                # dda.Simulation.resume (see Simulation.run)
 
@@ -373,8 +373,13 @@ _TABLES = ("scene", "materials", "blocks", "cut", "joints", "shake", "prescribe"
            "damping", "simulation", "output")
 
 
-def load_scene(path) -> LoadedScene:
+def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     """Read a TOML scene file (format in :mod:`dda.io.scene_file`).
+
+    ``[output] dir`` must stay inside the scene file's folder (a scene file from someone
+    else cannot write elsewhere) unless ``allow_outside_output``; ``prefix`` and
+    ``checkpoint`` are file names in it. An explicit output folder given to
+    :meth:`LoadedScene.run` (``dda run --out``) goes wherever it says.
 
     Raises
     ------
@@ -428,7 +433,8 @@ def load_scene(path) -> LoadedScene:
         "dt", "analysis", "velocity_carry", "max_open_close", "record_every",
         "max_displacement_ratio", "penetration_tolerance"))
     output = _read_output(r, data, path, keys={"dir", "prefix", "every", "checkpoint",
-                                               "checkpoint_every"})
+                                               "checkpoint_every"},
+                          outside=allow_outside_output)
     loaded = LoadedScene(scene, blocks, solver, settings, duration, path=path, effects=effects,
                          **output)
     # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
@@ -752,18 +758,54 @@ def _read_solver(r, sim, p, solver_keys):
     return r.call(p, cls, **{k: sim[k] for k in solver_keys if k in sim})
 
 
-def _read_output(r, data, path, keys) -> dict:
-    """``[output]``: the :class:`LoadedScene` fields of the output files and checkpoint."""
+def _read_output(r, data, path, keys, outside=False) -> dict:
+    """``[output]``: the :class:`LoadedScene` fields of the output files and checkpoint.
+
+    ``dir`` is a folder relative to the scene file's (the output root), which it may not
+    leave (no ``..`` past it, no absolute path, no link that leads out) unless ``outside``;
+    ``prefix`` and ``checkpoint`` are file names in it (no folders)."""
     out = r.table(data.get("output", {}), ("output",), keys)
-    fields = {"output_dir": path.parent / out["dir"] if "dir" in out else None,
-              "prefix": str(out.get("prefix", path.stem)),
+    folder = None
+    if "dir" in out:
+        folder = _output_dir(r, out["dir"], path.parent, outside)
+    fields = {"output_dir": folder,
+              "prefix": _file_name(r, out.get("prefix", path.stem), "prefix"),
               "every": _count(r, out, ("output",), "every", 1)}
     checkpoint = out.get("checkpoint")
-    if checkpoint is not None and (not isinstance(checkpoint, str) or not checkpoint):
-        raise r.error(("output", "checkpoint"), f"must be a file name, got {checkpoint!r}")
+    if checkpoint is not None:
+        checkpoint = _file_name(r, checkpoint, "checkpoint")
     fields["checkpoint"] = checkpoint
     fields["checkpoint_every"] = _count(r, out, ("output",), "checkpoint_every", 100)
     return fields
+
+
+def _output_dir(r, value, root: Path, outside: bool) -> Path:
+    """The ``[output] dir`` folder, inside the scene file's folder unless ``outside``."""
+    where = ("output", "dir")
+    if not isinstance(value, str) or not value.strip():
+        raise r.error(where, f"must be a folder name, got {value!r}")
+    folder = Path(value)
+    if outside:
+        return root / folder
+    hint = ("; output stays in the scene file's folder unless the command is given "
+            "--allow-outside-output (load_scene(..., allow_outside_output=True))")
+    if folder.is_absolute() or folder.drive:
+        raise r.error(where, f"{value!r} is an absolute path{hint}")
+    if ".." in folder.parts:
+        raise r.error(where, f"{value!r} goes up out of the folder with '..'{hint}")
+    resolved, top = (root / folder).resolve(), root.resolve()
+    if resolved != top and top not in resolved.parents:
+        raise r.error(where, f"{value!r} leads out of the scene file's folder (to "
+                             f"{resolved}){hint}")
+    return root / folder
+
+
+def _file_name(r, value, key: str) -> str:
+    """A file name of ``[output]`` (no folder part, nothing that climbs out)."""
+    if (not isinstance(value, str) or not value.strip() or value in (".", "..")
+            or "/" in value or "\\" in value or Path(value).name != value):
+        raise r.error(("output", key), f"must be a file name (no folders), got {value!r}")
+    return value
 
 
 # ---------------------------------------------------------------------- helpers
