@@ -101,7 +101,26 @@ class JointSet:
         return out
 
 
-def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0) -> list:
+def estimated_blocks(domain_bounds, domain_area: float, joint_sets) -> float:
+    """About how many blocks the sets cut a domain into, before any is cut: with ``n_i``
+    traces of set i across the domain's box (its extent across the traces over the
+    spacing) and their persistence ``p_i``, ``f (1 + sum n_i p_i + sum_{i<j} n_i p_i n_j
+    p_j)``, ``f`` the share of the box the domain fills (two persistent sets: ``n_1 n_2``
+    cells, as a grid has)."""
+    xmin, ymin, xmax, ymax = domain_bounds
+    corners = np.array([[xmin, ymin], [xmax, ymin], [xmax, ymax], [xmin, ymax]])
+    counts = []
+    for js in joint_sets:
+        across = corners @ js.normal
+        counts.append((across.max() - across.min()) / js.spacing * js.persistence)
+    box = max((xmax - xmin) * (ymax - ymin), 1e-300)
+    pairs = sum(counts[i] * counts[j] for i in range(len(counts))
+                for j in range(i + 1, len(counts)))
+    return min(1.0, domain_area / box) * (1.0 + sum(counts) + pairs)
+
+
+def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
+               max_blocks: int | None = None) -> list:
     """Cut a domain polygon into blocks along joint sets.
 
     Parameters
@@ -114,6 +133,10 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0)
         as slivers; by default a tenth of the smallest spacing.
     seed : int
         Seed of the random phases of non-persistent traces.
+    max_blocks : int, optional
+        Refuse at once, before cutting, when :func:`estimated_blocks` says the cut would
+        make more blocks than this (default :data:`dda.scene.MAX_BLOCKS`): a mistyped
+        spacing must not run for hours.
 
     Returns
     -------
@@ -145,6 +168,16 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0)
     if min_size is None:
         min_size = 0.1 * min((js.spacing for js in sets), default=0.0)
     min_size = finite_number("min_size", min_size, nonnegative=True, where="cut_blocks")
+    if max_blocks is None:
+        from dda.scene import MAX_BLOCKS
+
+        max_blocks = MAX_BLOCKS
+    estimate = estimated_blocks(dom.bounds, dom.area, sets)
+    if estimate > max_blocks:
+        raise ValueError(
+            f"cut_blocks: these joint sets would cut the domain into about {estimate:,.0f} "
+            f"blocks, more than the limit of {max_blocks:,} (max_blocks; a scene's "
+            "max_blocks); check the spacings (m) against the domain's size")
 
     rng = np.random.default_rng(seed)
     lines = [dom.exterior]

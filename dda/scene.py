@@ -13,7 +13,14 @@ from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
 from dda.materials import LinearElastic
 
-__all__ = ["Block", "Scene"]
+__all__ = ["Block", "Scene", "MAX_BLOCKS", "MAX_VERTICES"]
+
+#: the most blocks a scene takes, and vertices a block (Scene's defaults): far beyond any
+#: real scene (the 10,000-block benchmarks, polygons of tens of corners), they stop a mistyped
+#: input (a cut at centimetre spacing of a kilometre, a polygon of a million points) at once
+#: instead of running out of memory or time
+MAX_BLOCKS = 1_000_000
+MAX_VERTICES = 100_000
 
 
 @dataclass(frozen=True)
@@ -95,9 +102,16 @@ class Scene:
     Block(index=0, name='block0')
     """
 
-    def __init__(self, gravity: float | None = None):
+    def __init__(self, gravity: float | None = None, max_blocks: int = MAX_BLOCKS,
+                 max_vertices: int = MAX_VERTICES):
         g = 0.0 if gravity is None else finite_number("gravity", gravity, where="Scene")
         self.gravity = g
+        for name, value in (("max_blocks", max_blocks), ("max_vertices", max_vertices)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 3:
+                raise ValueError(f"Scene: {name} must be a whole number of at least 3, got "
+                                 f"{value!r}")
+        self.max_blocks = int(max_blocks)
+        self.max_vertices = int(max_vertices)
         self._blocks: list[_BlockInput] = []
         self._handles: list[Block] = []
         self._loads: list[_PointLoad] = []
@@ -159,6 +173,9 @@ class Scene:
             their joints, where the strain is tiny and costs unknowns.
         """
         index = len(self._blocks)
+        if index >= self.max_blocks:
+            raise ValueError(f"add_block: the scene has {index} blocks, its limit "
+                             f"(Scene(max_blocks=...), default {MAX_BLOCKS:,})")
         name = f"block{index}" if name is None else str(name)
         if any(h.name == name for h in self._handles):
             raise ValueError(f"a block named {name!r} exists already; block names must be unique")
@@ -167,6 +184,9 @@ class Scene:
             v = np.array(vertices, dtype=float)
         except (TypeError, ValueError):
             raise ValueError(f"{where}: vertices must be an (n, 2) array of numbers") from None
+        if v.ndim == 2 and len(v) > self.max_vertices:
+            raise ValueError(f"{where}: {len(v):,} vertices, more than the limit of "
+                             f"{self.max_vertices:,} a block (Scene(max_vertices=...))")
         if v.ndim != 2 or v.shape[1] != 2 or len(v) < 3:
             raise ValueError(
                 f"{where}: vertices must be an (n, 2) array with n >= 3, got {v.shape}"

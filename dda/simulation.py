@@ -38,7 +38,15 @@ from dda.solvers.newton import NewtonRaphson
 from dda.step import StepSettings, StepState, step
 from dda.step_control import StepControl
 
-__all__ = ["Simulation", "SimulationError", "PenaltyWarning", "CHECKPOINT_VERSION"]
+__all__ = ["Simulation", "SimulationError", "PenaltyWarning", "CHECKPOINT_VERSION", "MIN_DT",
+           "MAX_DT"]
+
+#: the shortest and the longest step a simulation takes (s): a contact's period is
+#: microseconds at the stiffest (a 1 cm block at 1000 times the rock's modulus) and a block's
+#: motion is seconds; outside them the arithmetic of a step overflows (dt 1e300) or a run
+#: never ends (dt 1e-300)
+MIN_DT = 1e-9
+MAX_DT = 1e3
 
 #: the stats columns of the step profile's sections, in its order
 
@@ -119,6 +127,9 @@ class Simulation:
             raise ValueError(f"Simulation: dt must be a number (s) or 'auto', got {dt!r}")
         self.dt = None if auto_dt else finite_number("dt", dt, positive=True,
                                                      where="Simulation")
+        if self.dt is not None and not MIN_DT <= self.dt <= MAX_DT:
+            raise ValueError(f"Simulation: dt must lie between {MIN_DT:g} and {MAX_DT:g} s, "
+                             f"got {self.dt:g} (a step is seconds, not steps per second)")
         if solver is None:
             solver = NewtonRaphson()
         if not isinstance(solver, NonlinearSolver):

@@ -326,6 +326,10 @@ def test_the_file_format_covers_every_api_setting():
     for name in inspect.signature(dda.Scene.add_block).parameters:
         if name not in ("self", "vertices"):
             assert f'"{name}"' in source, f"[[blocks]] has no key {name!r}"
+    reader = inspect.getsource(scene_file._read_scene)
+    for name in inspect.signature(dda.Scene.__init__).parameters:
+        if name != "self":
+            assert f'"{name}"' in reader, f"[scene] has no key {name!r}"
 
 
 @pytest.mark.parametrize("change, line, key, words", [

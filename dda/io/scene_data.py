@@ -285,8 +285,8 @@ def joint_from_data(data, where: str) -> JointMaterial:
 
 
 # ---------------------------------------------------------------------- the scene
-_SCENE_KEYS = {"gravity", "materials", "blocks", "joints", "shakes", "motions", "loads",
-               "damping"}
+_SCENE_KEYS = {"gravity", "max_blocks", "max_vertices", "materials", "blocks", "joints",
+               "shakes", "motions", "loads", "damping"}
 
 
 def scene_to_data(scene, store: ArrayStore) -> dict:
@@ -301,7 +301,8 @@ def scene_to_data(scene, store: ArrayStore) -> dict:
         material_of.append(materials.index(b.material))
     verts, offsets = scene.vertex_arrays()
     data = {
-        "gravity": float(scene.gravity),
+        "gravity": float(scene.gravity), "max_blocks": int(scene.max_blocks),
+        "max_vertices": int(scene.max_vertices),
         "materials": [{"young": float(m.young), "poisson": float(m.poisson),
                        "density": float(m.density), "plane": str(m.plane)}
                       for m in materials],
@@ -363,7 +364,10 @@ def scene_from_data(data, store: ArrayStore):
 
     _table(data, "scene", _SCENE_KEYS, _SCENE_KEYS)
     try:
-        scene = Scene(gravity=_number(data, "gravity", "scene"))
+        limits = {k: data[k] for k in ("max_blocks", "max_vertices")}
+        if not all(isinstance(v, int) and not isinstance(v, bool) for v in limits.values()):
+            raise SceneDataError("scene: max_blocks and max_vertices must be whole numbers")
+        scene = Scene(gravity=_number(data, "gravity", "scene"), **limits)
         materials = [LinearElastic(**_table(m, f"scene.materials[{i}]",
                                             {"young", "poisson", "density", "plane"},
                                             {"young", "poisson", "density", "plane"}))

@@ -10,6 +10,8 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
 
     [scene]
     gravity = 9.81                        # 0 or absent: no gravity
+    max_blocks = 1000000                  # optional limits (these are the defaults): a cut
+    max_vertices = 100000                 # or a block past them is refused at once
 
     [materials.rock]                      # any number of named materials
     young = 10e9
@@ -137,6 +139,11 @@ except ModuleNotFoundError:  # Python 3.10
 
 __all__ = ["load_scene", "LoadedScene", "SceneFileError", "SineAcceleration",
            "ConstantVelocity"]
+
+
+#: the largest scene file read (bytes): far above any real scene's text, it keeps a runaway
+#: file from filling memory before it is even parsed
+MAX_FILE_BYTES = 64 * 2**20
 
 
 class SceneFileError(ValueError):
@@ -448,11 +455,22 @@ def _read_file(path):
     path = Path(path)
     if not path.is_file():
         raise SceneFileError(f"no scene file {path}")
-    text = path.read_text(encoding="utf-8")
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise SceneFileError(f"{path.name}: {size:,} bytes, more than a scene file's "
+                             f"{MAX_FILE_BYTES:,} (give large data as a CSV record or cut "
+                             "blocks from joint sets)")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise SceneFileError(f"{path.name}: not UTF-8 text ({exc})") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise SceneFileError(f"{path.name}: not valid TOML: {exc}") from None
+    except RecursionError:
+        raise SceneFileError(f"{path.name}: not a scene file: its arrays or tables nest too "
+                             "deeply to read") from None
     r = _Reader(path.name, key_lines(text))
     r.table(data, (), set(_TABLES))
     return path, data, r
@@ -462,9 +480,10 @@ def _read_scene(r, data):
     """``[scene]``: the :class:`dda.Scene` and the effects it has (gravity)."""
     from dda.scene import Scene
 
-    sc = r.table(data.get("scene", {}), ("scene",), {"gravity"})
+    sc = r.table(data.get("scene", {}), ("scene",), {"gravity", "max_blocks", "max_vertices"})
     gravity = r.number(sc, ("scene",), "gravity", default=0.0)
-    scene = r.call(("scene",), Scene, gravity=gravity or None)
+    limits = {k: sc[k] for k in ("max_blocks", "max_vertices") if k in sc}
+    scene = r.call(("scene",), Scene, gravity=gravity or None, **limits)
     return scene, ["gravity"] if gravity else []
 
 
@@ -526,6 +545,8 @@ def _read_cuts(r, data, materials, add_block) -> dict:
             kwargs["min_size"] = r.number(c, p, "min_size")
         if "seed" in c:
             kwargs["seed"] = int(r.number(c, p, "seed"))
+        scene = add_block.__self__  # the scene's block limit bounds the cut too
+        kwargs["max_blocks"] = scene.max_blocks - len(scene.blocks)
         polys = r.call(p, cut_blocks, r.points(c, p, "domain"), sets, **kwargs)
         prefix = c.get("name", f"cut{i}_")
         mat = _material(r, materials, c, p)
