@@ -23,7 +23,9 @@ solve
     built-in friction laws, the whole OPEN-CLOSE iteration (with legacy DDA's pull-back and
     step end) and the whole Newton-Raphson iteration (their kinematics, return maps and
     assembly too: one kernel call each, :mod:`dda.kernels.dense_passes`,
-    :mod:`dda.kernels.dense_newton`)
+    :mod:`dda.kernels.dense_newton`); and a small scene's common step from its detection to
+    its guard, in one kernel call (:mod:`dda.kernels.small_step`: its detection,
+    contact_element and guard read 0)
 guard
     the penetration guard: every vertex inside another block at the end of the step, found
     geometrically and checked against the closed contacts (:mod:`dda.contact.penetration`)

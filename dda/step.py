@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dda import geometry
+from dda.contact import element as element_module
 from dda.contact.contacts import OPEN, ContactSet, carry_over
 from dda.contact.dashpot import (
     contact_mass,
@@ -39,16 +40,22 @@ from dda.contact.detection import (
     pairs_with_free_block,
 )
 from dda.contact.element import ContactElement, LawGroups
-from dda.contact.penetration import GuardReport, penetration_guard
+from dda.contact.penetration import GuardReport, _untracked_reason, penetration_guard
+from dda.contact.tangent import SPRING_TERMS
 from dda.errors import SimulationError
 from dda.kernels.blocks import step_end, step_start
 from dda.kernels.dashpot import dashpot_stiffnesses
 from dda.kernels.open_close import as_float64
+from dda.kernels.small_step import FALLBACK, MOVED, NOT_SOLVED, TOO_FAR, UNTRACKED, contact_step
 from dda.model import Model
-from dda.profiling import section
+from dda.profiling import count_solve, section
+from dda.solvers import legacy as legacy_module
+from dda.solvers import newton as newton_module
+from dda.solvers import open_close as oc
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
+from dda.solvers.linear import DENSE_LIMIT, SystemPattern
 from dda.solvers.newmark import effective_system, updated_velocity
-from dda.solvers.open_close import gap_round_off
+from dda.solvers.open_close import dense_layout, gap_round_off, pass_rules
 
 __all__ = ["StepSettings", "StepState", "StepReport", "step", "search_distance",
            "deepest_spring", "SEARCH_FACTOR"]
@@ -63,6 +70,11 @@ BLOCK_KERNELS = True
 # (ContactElement.compiled; the same bits, some 40 us less of a 2-block step); False builds
 # them through the constructor and the dashpot kernels
 COMPILED_ELEMENT = True
+
+# a small scene's common step (the same contacts as the last step, carried over whole) runs
+# from its detection to its guard in one kernel call (dda.kernels.small_step; the same bits as
+# the composed path, which takes every other step); False: every step composed
+SMALL_STEP = True
 
 _NO_MOVES = np.zeros((0, 2))
 
@@ -196,6 +208,11 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     else:  # the known blocks stand still (the arrays are shared, never changed in place)
         known_u, known_v, shaking, known_du = state.known_u, None, state.shaking, _NO_MOVES
     d0 = search_distance(model, state, dt, carry, ints.centroid, known_du, search_hint, speed)
+    if plain and carry and SMALL_STEP:
+        done = _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_eff,
+                           (known_u, known_v, d_known, shaking))
+        if done is not None:
+            return done
     found = _detect(model, state, d0, settings.penetration_tolerance)
     element = _element(model, state, found, ints, dt if carry else 0.0)
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
@@ -232,6 +249,146 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     trial = _advanced(model, state, dt, sol, ints.centroid, ended, v_eff,
                       (known_u, known_v, d_known, shaking), guard)
     return trial, report
+
+
+def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_eff, known):
+    """:func:`step` from the detection on through :func:`dda.kernels.small_step.
+    contact_step`, or None when the step is not one it takes (then the composed path does).
+
+    It takes a dynamic step of a scene of plain blocks with one built-in law (not judged by
+    faces), a dense system, contacts in the committed state, and the solver's own one-call
+    dense step (:class:`dda.solvers.LegacyPullBack`, :class:`dda.solvers.NewtonRaphson`)."""
+    c = state.contacts
+    m = len(c)
+    kind = type(solver)
+    newton = kind is newton_module.NewtonRaphson
+    # it stands for the solvers' own solve_step and this module's detection: a solver
+    # whose solve_step is wrapped, or a detection function swapped, takes the composed path
+    if not (m and COMPILED_ELEMENT and oc.DENSE_PASSES and oc.PASS_LOG is None
+            and element_module.KERNEL_LAWS and "solve_step" not in solver.__dict__
+            and narrow_phase is _NARROW_PHASE and keep_closed is _KEEP_CLOSED
+            and (newton and newton_module.DENSE_NEWTON and newton_module.NEWTON_DENSE_STEP
+                 and kind.solve_step is _NEWTON_SOLVE_STEP
+                 or kind is legacy_module.LegacyPullBack and legacy_module.LEGACY_DENSE_STEP
+                 and kind.solve_step is _LEGACY_SOLVE_STEP)):
+        return None
+    constants = _small_step_constants(model)
+    if constants is None:
+        return None
+    law, initial, zeta, zeta_s, rigid = constants
+    history = c.history
+    sliding = history.get("sliding")
+    if (len(history) != 2 + (sliding is not None) or "g_se" not in history
+            or "slip" not in history or (sliding is None and law[0] != 0)):
+        return None
+    factors = _factors(solver)
+    args = (model.free, c.bj, c.bk, model.rigid)
+    pattern = (SystemPattern(*args) if factors is None else factors.kept(
+        "pattern", args, lambda: SystemPattern(*args, cache=factors)))
+    if pattern.n > DENSE_LIMIT or pattern.unknowns == 0:
+        return None
+    joints = model.joints
+    with section("solve"):
+        (status, counts, numbers_out, d, norms, trial_state, xi0, t_n, t_s, g_se, slip,
+         sliding_out, x_new, velocity, stress, rotation, centroid, pn, dashpot, ps,
+         shear_dashpot) = contact_step(
+            newton, state.x, model.offsets, model.topo.nxt, model.topo.prv, model.topo.block,
+            model.free, model.thickness, model.size, model.density, model.elasticity,
+            state.stress, state.rotation, ints.centroid, ints.area, ints.sxx, ints.syy, v_eff,
+            float(dt), float(d0), float(state.penetration), model.min_size,
+            float(settings.penetration_tolerance), model.min_thickness,
+            float(settings.max_displacement_ratio), joints.pair_keys, joints.pair_joint,
+            joints.default, joints.normal_penalty, joints.shear_penalty, zeta, zeta_s,
+            c.vertex, c.edge, c.bj, c.bk, c.state, c.xi0, c.t_n, c.t_s, history["g_se"],
+            history["slip"], np.zeros(m) if sliding is None else sliding, law, initial,
+            k_eff, f_eff, known[2], *dense_layout(pattern), SPRING_TERMS, oc.GAP_ROUND_OFF,
+            oc._COORDINATE_ROUND_OFF, settings.max_open_close, float(oc.SETTLE_BAND),
+            pass_rules(), bool(getattr(solver, "unsettled_predictor", False)),
+            int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
+            float(getattr(solver, "tol", 1.0)), newton_module.ROUND_OFF,
+            newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH, rigid)
+    if status == FALLBACK:
+        return None
+    (solver_status, oc_status, oc_passes, passes, iterations, solves, n_pairs, worst, gv, gk,
+     on_edge) = counts.tolist()
+    largest, worst_move, scale, deepest, spring, untracked, gdepth, gtol = numbers_out.tolist()
+    count_solve(solves)
+    costs = (pattern.unknowns, n_pairs)
+    if status == NOT_SOLVED:
+        return None, StepReport.of(_small_failure(newton, solver, solver_status, oc_status,
+                                                  oc_passes, passes, iterations, d, norms,
+                                                  scale), *costs)
+    history = {"g_se": g_se, "slip": slip}
+    if sliding is not None:
+        history["sliding"] = sliding_out
+    sol = StepSolution(d, ContactSet(c.vertex, c.edge, c.bj, c.bk, trial_state, xi0, t_n, t_s,
+                                     history), True, passes,
+                       iterations if newton else passes, "", norms.tolist() if newton else [])
+    ended = _Ended(x_new, largest, worst, worst_move, velocity, stress, rotation, centroid)
+    if status == MOVED or status == TOO_FAR:
+        refused = _refusal(model, ended, d0, settings.max_displacement_ratio)
+        return None, StepReport.of(sol, *costs, reason=refused[0], search_hint=refused[1])
+    reason = ""
+    if status == UNTRACKED:
+        reason = _untracked_reason(model, x_new, bool(on_edge), gv, gk, gdepth, gtol)
+    guard = GuardReport(reason, deepest, spring, untracked)
+    report = StepReport.of(sol, *costs, reason=reason, guard=guard)
+    if reason:
+        return None, report
+    return _advanced(model, state, dt, sol, ints.centroid, ended, v_eff, known, guard), report
+
+
+def _small_failure(newton, solver, solver_status, oc_status, oc_passes, passes, iterations, d,
+                   norms, scale) -> StepSolution:
+    """The failed solution of :func:`_small_step`'s solver, as the solver's own dense step
+    words it (:mod:`dda.solvers.legacy`, :mod:`dda.solvers.newton`)."""
+    if not newton:
+        return StepSolution(None, None, False, passes, passes,
+                            oc.dense_failure(solver_status, passes))
+    unsettled = oc_status == oc.NOT_SETTLED and solver.unsettled_predictor
+    if oc_status != oc.CONVERGED and not unsettled:
+        return StepSolution(None, None, False, passes, 0, oc.dense_failure(oc_status, oc_passes))
+    sol = newton_module._solution(None, solver_status, iterations, d, norms, scale, None, None,
+                                  None, None, None)
+    sol.open_close_passes = passes
+    if unsettled:
+        sol.reason = (f"{oc.dense_failure(oc_status, oc_passes)}, and from its last pass "
+                      f"{sol.reason}")
+    return sol
+
+
+def _small_step_constants(model):
+    """What :func:`_small_step` passes of the model's one law and joints, kept with the
+    model while its joint table is the same object; None when the scene has none to pass
+    (several laws, a law without a kernel, or one judged by faces)."""
+    joints = model.joints
+    kept = model.__dict__.get("_small_step_constants")
+    if kept is not None and kept[0] is joints:
+        return kept[1]
+    constants = None
+    if len(joints.laws) == 1 and model.n_blocks > 1:
+        law = joints.laws[0]
+        numbers = law._kernel_parameters()
+        if numbers is not None and not law.uses_faces:
+            initial = law.history_fields()
+            zeta = joints.damping_ratio
+            zeta_s = getattr(joints, "shear_damping_ratio", None)
+            constants = (
+                (int(numbers[0]), *(float(v) for v in numbers[1:])),
+                (float(initial["g_se"]), float(initial["slip"]),
+                 float(initial.get("sliding", 0.0))),
+                _NO_ZETA if zeta is None else np.ascontiguousarray(zeta, dtype=np.float64),
+                _NO_ZETA if zeta_s is None else np.ascontiguousarray(zeta_s, dtype=np.float64),
+                np.zeros(model.n_blocks, dtype=np.bool_) if model.rigid is None
+                else np.asarray(model.rigid, dtype=np.bool_))
+    model.__dict__["_small_step_constants"] = (joints, constants)
+    return constants
+
+
+_NO_ZETA = np.zeros(0)
+_NARROW_PHASE, _KEEP_CLOSED = narrow_phase, keep_closed
+_LEGACY_SOLVE_STEP = legacy_module.LegacyPullBack.solve_step
+_NEWTON_SOLVE_STEP = newton_module.NewtonRaphson.solve_step
 
 
 def search_distance(model, state, dt, carry, centroid, known_du, search_hint=0.0,

@@ -86,27 +86,36 @@ def block_on_base():
     return scene, base
 
 
-@pytest.mark.parametrize("one_call", [False, True])
+@pytest.mark.parametrize("mode", ["composed", "one call", "small step"])
 @pytest.mark.parametrize("solver", [dda.solvers.LegacyPullBack, dda.solvers.NewtonRaphson])
-def test_step_stats_hold_the_parts_and_the_counts(solver, one_call, monkeypatch):
+def test_step_stats_hold_the_parts_and_the_counts(solver, mode, monkeypatch):
     """Every section is timed in every step; with a dense system's OPEN-CLOSE and Newton
-    iterations in one kernel call (``one_call``) their return maps and assembly are the
-    ``solve`` section's."""
+    iterations in one kernel call (``one call``) their return maps and assembly are the
+    ``solve`` section's, and a small scene's common step (``small step``: every step here but
+    the first, which starts without contacts) is ``solve`` from its detection to its guard
+    (:mod:`dda.kernels.small_step`)."""
+    from dda import step
     from dda.solvers import newton, open_close
 
-    monkeypatch.setattr(open_close, "DENSE_PASSES", one_call)
-    monkeypatch.setattr(newton, "DENSE_NEWTON", one_call)
+    monkeypatch.setattr(open_close, "DENSE_PASSES", mode != "composed")
+    monkeypatch.setattr(newton, "DENSE_NEWTON", mode != "composed")
+    monkeypatch.setattr(step, "SMALL_STEP", mode == "small step")
     scene, _ = block_on_base()
     result = dda.Simulation(scene, dt=1e-3, solver=solver()).run(0.05)
     st = result.stats
     parts = np.sum([st[f"{name}_time"] for name in SECTIONS], axis=0)
     assert np.all(parts > 0.0)
     assert np.all(parts <= st["wall_time"])
-    folded = {"return_map", "assembly"} if one_call else set()
+    folded = {"composed": set(), "one call": {"return_map", "assembly"},
+              "small step": {"return_map", "assembly", "detection", "contact_element",
+                             "guard"}}[mode]
+    later = slice(1, None) if mode == "small step" else slice(None)
     for name in SECTIONS:
         if name not in folded:
-            assert np.all(st[f"{name}_time"] > 0.0), name
-    if one_call and solver is dda.solvers.LegacyPullBack:  # the whole step's friction
+            assert np.all(st[f"{name}_time"][later] > 0.0), name
+        elif mode == "small step":
+            assert np.all(st[f"{name}_time"][later] == 0.0), name
+    if mode != "composed" and solver is dda.solvers.LegacyPullBack:  # the step's friction
         assert np.all(st["return_map_time"] == 0.0)
     # every OPEN-CLOSE pass solves once; Newton adds one solve per iteration
     expected = st["open_close_passes"] + (st["iterations"] if solver is

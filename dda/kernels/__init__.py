@@ -27,7 +27,12 @@
 - :mod:`dda.kernels.dense_passes` and :mod:`dda.kernels.dense_newton`: on a system solved
   dense, every OPEN-CLOSE pass (with legacy DDA's pull-back and step end) and every Newton
   iteration in one call each, built from the kernels above (their numbers agree with the
-  composed path's to round-off, not to the bit: numba's LAPACK is not numpy's).
+  composed path's to round-off, not to the bit: numba's LAPACK is not numpy's);
+- :mod:`dda.kernels.element`: a step's contact element, every law-independent array and
+  both dashpots, in one call;
+- :mod:`dda.kernels.small_step`: a small scene's common step (the same contacts as the last
+  step) from its detection to its guard in one call: the kernels above in the composed
+  step's order, to the bit.
 
 Two passes live beside the numpy code they replace, in :mod:`dda.contact`: the narrow phase
 after the broad phase (``detection._narrow_phase_kernel``) and the penetration guard
