@@ -40,6 +40,7 @@ from dda.contact.detection import (
     pairs_with_free_block,
 )
 from dda.contact.element import ContactElement, LawGroups
+from dda.contact.faces import FACE_ANGLE
 from dda.contact.penetration import GuardReport, _untracked_reason, penetration_guard
 from dda.contact.tangent import SPRING_TERMS
 from dda.errors import SimulationError
@@ -255,9 +256,9 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
     """:func:`step` from the detection on through :func:`dda.kernels.small_step.
     contact_step`, or None when the step is not one it takes (then the composed path does).
 
-    It takes a dynamic step of a scene of plain blocks with one built-in law (not judged by
-    faces), a dense system, contacts in the committed state, and the solver's own one-call
-    dense step (:class:`dda.solvers.LegacyPullBack`, :class:`dda.solvers.NewtonRaphson`)."""
+    It takes a dynamic step of a scene of plain blocks with one built-in law, a dense system,
+    contacts in the committed state, and the solver's own one-call dense step
+    (:class:`dda.solvers.LegacyPullBack`, :class:`dda.solvers.NewtonRaphson`)."""
     c = state.contacts
     m = len(c)
     kind = type(solver)
@@ -275,7 +276,7 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
     constants = _small_step_constants(model)
     if constants is None:
         return None
-    law, initial, zeta, zeta_s, rigid = constants
+    law, initial, zeta, zeta_s, rigid, faces = constants
     history = c.history
     sliding = history.get("sliding")
     if (len(history) != 2 + (sliding is not None) or "g_se" not in history
@@ -306,7 +307,8 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
             pass_rules(), bool(getattr(solver, "unsettled_predictor", False)),
             int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
             float(getattr(solver, "tol", 1.0)), newton_module.ROUND_OFF,
-            newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH, rigid)
+            newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH, rigid, faces,
+            _FACE_COS)
     if status == FALLBACK:
         return None
     (solver_status, oc_status, oc_passes, passes, iterations, solves, n_pairs, worst, gv, gk,
@@ -360,7 +362,7 @@ def _small_failure(newton, solver, solver_status, oc_status, oc_passes, passes, 
 def _small_step_constants(model):
     """What :func:`_small_step` passes of the model's one law and joints, kept with the
     model while its joint table is the same object; None when the scene has none to pass
-    (several laws, a law without a kernel, or one judged by faces)."""
+    (several laws, or a law without a kernel)."""
     joints = model.joints
     kept = model.__dict__.get("_small_step_constants")
     if kept is not None and kept[0] is joints:
@@ -369,7 +371,7 @@ def _small_step_constants(model):
     if len(joints.laws) == 1 and model.n_blocks > 1:
         law = joints.laws[0]
         numbers = law._kernel_parameters()
-        if numbers is not None and not law.uses_faces:
+        if numbers is not None:
             initial = law.history_fields()
             zeta = joints.damping_ratio
             zeta_s = getattr(joints, "shear_damping_ratio", None)
@@ -380,12 +382,13 @@ def _small_step_constants(model):
                 _NO_ZETA if zeta is None else np.ascontiguousarray(zeta, dtype=np.float64),
                 _NO_ZETA if zeta_s is None else np.ascontiguousarray(zeta_s, dtype=np.float64),
                 np.zeros(model.n_blocks, dtype=np.bool_) if model.rigid is None
-                else np.asarray(model.rigid, dtype=np.bool_))
+                else np.asarray(model.rigid, dtype=np.bool_), bool(law.uses_faces))
     model.__dict__["_small_step_constants"] = (joints, constants)
     return constants
 
 
 _NO_ZETA = np.zeros(0)
+_FACE_COS = float(np.cos(np.radians(FACE_ANGLE)))
 _NARROW_PHASE, _KEEP_CLOSED = narrow_phase, keep_closed
 _LEGACY_SOLVE_STEP = legacy_module.LegacyPullBack.solve_step
 _NEWTON_SOLVE_STEP = newton_module.NewtonRaphson.solve_step

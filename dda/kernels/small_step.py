@@ -44,6 +44,7 @@ from dda.kernels.blocks import step_end
 from dda.kernels.dense_newton import newton_dense_step
 from dda.kernels.dense_passes import legacy_dense_step
 from dda.kernels.element import element_arrays
+from dda.kernels.faces import face_index
 from dda.kernels.joints import deepest_spring, joint_rows
 
 __all__ = ["contact_step", "OK", "FALLBACK", "NOT_SOLVED", "MOVED", "TOO_FAR", "UNTRACKED"]
@@ -60,11 +61,12 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
                  law, init, block_k, block_f, d_known, n, block_base, block_step, free_blocks,
                  pair_base, pair_step, side_row, side_block, keep, reduced, terms, gap_rel,
                  gap_abs, max_passes, band, rules, unsettled, max_iter, predictor_iterations,
-                 tol, round_off, halvings, cycle_length, rigid):
+                 tol, round_off, halvings, cycle_length, rigid, faces, face_cos):
     """One step's contacts, solve, moves and guard (module docstring).
 
     ``law`` is ``(kind, mu_static, mu_dynamic, cohesion)`` of the scene's one law, ``init``
-    its initial ``(g_se, slip, sliding)``; ``rules`` the passes' ``(rtol, floor,
+    its initial ``(g_se, slip, sliding)``, ``faces`` whether it judges faces (grouped with
+    :func:`dda.kernels.faces.face_index` and ``face_cos``); ``rules`` the passes' ``(rtol, floor,
     cycle_tension, relax_after, patience)``; the rest are the arguments of the kernels named
     in the module docstring, under their names there.
 
@@ -179,7 +181,10 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     mu_s = np.full(m, law[1])
     mu_d = np.full(m, law[2])
     cohesion = np.full(m, law[3])
-    face = np.full(m, -1, dtype=np.int64)
+    if faces:  # (ContactElement.compiled: the law's contacts grouped into faces)
+        face = face_index(x, vertex, edge, nxt, prv, face_cos)
+    else:
+        face = np.full(m, -1, dtype=np.int64)
     # ---- the solver's step (dda.solvers.legacy._dense_step, dda.solvers.newton._dense_step)
     rtol, floor, cycle_tension, relax_after, patience = rules
     norms = e0
