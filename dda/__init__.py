@@ -12,8 +12,13 @@ from dda import io  # noqa: E402
 from dda.io.scene_file import load_scene  # noqa: E402
 from dda.result import Result  # noqa: E402
 from dda.scene import Block, Scene  # noqa: E402
-from dda.simulation import PenaltyWarning, Simulation, SimulationError  # noqa: E402
+from dda.simulation import (  # noqa: E402
+    PenaltyWarning,
+    PlausibilityWarning,
+    Simulation,
+    SimulationError,
+)
 
-__all__ = ["Block", "PenaltyWarning", "Result", "Scene", "Simulation", "SimulationError", "io",
-           "load_scene"]
+__all__ = ["Block", "PenaltyWarning", "PlausibilityWarning", "Result", "Scene", "Simulation",
+           "SimulationError", "io", "load_scene"]
 __version__ = "0.1.0"

@@ -10,6 +10,9 @@ import numpy as np
 def finite_number(name: str, value, *, positive=False, nonnegative=False, where: str = "") -> float:
     """Return ``value`` as a float, or raise ValueError naming ``name`` (and ``where``)."""
     label = f"{where}: {name}" if where else name
+    if isinstance(value, (str, bytes)):
+        raise ValueError(f"{label} must be a number, got the text {value!r} (give it without "
+                         "quotes)")
     try:
         x = float(value)
     except (TypeError, ValueError):

@@ -12,6 +12,7 @@ from dda.contact.detection import find_overlaps
 from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
 from dda.materials import LinearElastic
+from dda.plausibility import check_gravity
 
 __all__ = ["Block", "Scene", "MAX_BLOCKS", "MAX_VERTICES"]
 
@@ -105,6 +106,7 @@ class Scene:
     def __init__(self, gravity: float | None = None, max_blocks: int = MAX_BLOCKS,
                  max_vertices: int = MAX_VERTICES):
         g = 0.0 if gravity is None else finite_number("gravity", gravity, where="Scene")
+        check_gravity(g)
         self.gravity = g
         for name, value in (("max_blocks", max_blocks), ("max_vertices", max_vertices)):
             if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 3:

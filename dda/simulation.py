@@ -27,6 +27,7 @@ from dda.io.checkpoint import (
 )
 from dda.model import Model
 from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning
+from dda.plausibility import PlausibilityWarning, check_time_step
 from dda.profiling import StepProfile
 from dda.progress import ProgressBar
 from dda.recorder import Recorder, frame
@@ -38,8 +39,8 @@ from dda.solvers.newton import NewtonRaphson
 from dda.step import StepSettings, StepState, step
 from dda.step_control import StepControl
 
-__all__ = ["Simulation", "SimulationError", "PenaltyWarning", "CHECKPOINT_VERSION", "MIN_DT",
-           "MAX_DT"]
+__all__ = ["Simulation", "SimulationError", "PenaltyWarning", "PlausibilityWarning",
+           "CHECKPOINT_VERSION", "MIN_DT", "MAX_DT"]
 
 #: the shortest and the longest step a simulation takes (s): a contact's period is
 #: microseconds at the stiffest (a 1 cm block at 1000 times the rock's modulus) and a block's
@@ -168,6 +169,7 @@ class Simulation:
                 self.model.joints = self.model.joints.with_penalties(choice.normal_penalty,
                                                                      choice.shear_penalty)
             self.choices = choice.text
+        check_time_step(self.model, self.dt)
         self.committed = StepState.initial(self.model)
         self.control = StepControl(self.dt)
         self.advisor = PenaltyAdvisor(self.model, self.dt)

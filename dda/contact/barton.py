@@ -16,6 +16,7 @@ import numpy as np
 
 from dda._checks import finite_number
 from dda.contact.friction import FrictionLaw, FrictionTrial
+from dda.plausibility import check_angle
 
 __all__ = ["BartonBandis", "MOBILIZATION_SLIP", "MOBILIZATION_JRC"]
 
@@ -151,6 +152,7 @@ class BartonBandis(FrictionLaw):
             raise ValueError(f"{where}: max_angle is in degrees and must be below 90, "
                              f"got {max_angle}")
         self.phi_r = finite_number("phi_r", phi_r, nonnegative=True, where=where)
+        check_angle("phi_r", self.phi_r, where)
         if self.phi_r >= self.max_angle:
             raise ValueError(f"{where}: phi_r ({phi_r}) must lie below max_angle "
                              f"({self.max_angle}) degrees")

@@ -15,6 +15,7 @@ import numpy as np
 from dda._checks import finite_number
 from dda.kernels.friction import coulomb_return_map, transition_return_map
 from dda.kernels.open_close import COULOMB, TRANSITION, TRANSITION_FACE
+from dda.plausibility import check_angle
 
 __all__ = ["FrictionLaw", "FrictionTrial", "CoulombLike", "CoulombSingle",
            "StaticDynamicTransition"]
@@ -261,6 +262,7 @@ class CoulombSingle(CoulombLike):
             raise ValueError(f"CoulombSingle: phi is in degrees and must be below 90, got {phi}")
         self.phi = phi
         self.cohesion = finite_number("cohesion", cohesion, nonnegative=True, where="CoulombSingle")
+        check_angle("phi", phi, "CoulombSingle")
         self.mu = float(np.tan(np.radians(phi)))
 
     def __repr__(self):
@@ -378,6 +380,8 @@ class StaticDynamicTransition(CoulombLike):
             raise ValueError(f"{where}: onset must be one of {self.ONSETS}, got {onset!r}")
         self.phi_static, self.phi_dynamic = phi_s, phi_d
         self.onset = onset
+        check_angle("phi_static", phi_s, where)
+        check_angle("phi_dynamic", phi_d, where)
         self.mu_static = float(np.tan(np.radians(phi_s)))
         self.mu_dynamic = float(np.tan(np.radians(phi_d)))
 

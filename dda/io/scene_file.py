@@ -125,12 +125,14 @@ from __future__ import annotations
 import csv
 import math
 import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from dda import registry
+from dda.plausibility import PlausibilityWarning, check_direction
 
 try:
     import tomllib
@@ -292,11 +294,21 @@ class _Reader:
         return (float(v[0]), float(v[1]))
 
     def call(self, path, fn, *args, **kwargs):
-        """Call an API function and turn its ValueError/TypeError into this file's error."""
-        try:
-            return fn(*args, **kwargs)
-        except (ValueError, TypeError) as exc:
-            raise self.error(path, str(exc)) from None
+        """Call an API function and turn its ValueError/TypeError into this file's error, and
+        its plausibility warnings into warnings that name the file, line and key."""
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PlausibilityWarning)
+            try:
+                out = fn(*args, **kwargs)
+            except (ValueError, TypeError) as exc:
+                raise self.error(path, str(exc)) from None
+        for w in caught:
+            if issubclass(w.category, PlausibilityWarning):
+                warnings.warn(str(self.error(path, str(w.message))), PlausibilityWarning,
+                              stacklevel=3)
+            else:
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return out
 
 
 def _format_path(path) -> str:
@@ -665,6 +677,8 @@ def _read_shaking(r, data, blocks, shake, folder) -> list:
 def _sine(r, spec, q) -> SineAcceleration:
     """The ``sine = {...}`` of a ``[[shake]]`` table (``q`` is its path)."""
     sine = r.table(spec, q, {"amplitude", "frequency", "start", "direction"})
+    check_direction("direction", r.pair(sine, q, "direction", (1.0, 0.0)),
+                    f"{r.name}, {_format_path(q)}")
     return SineAcceleration(r.number(sine, q, "amplitude"),
                             r.number(sine, q, "frequency", positive=True),
                             r.number(sine, q, "start", default=0.0),

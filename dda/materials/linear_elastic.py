@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda._checks import finite_number
+from dda.plausibility import check_density, check_young
 
 
 @dataclass(frozen=True)
@@ -37,11 +38,15 @@ class LinearElastic:
     plane: str = "stress"
 
     def __post_init__(self):
-        finite_number("young", self.young, positive=True, where="LinearElastic")
+        young = finite_number("young", self.young, positive=True, where="LinearElastic")
         nu = finite_number("poisson", self.poisson, where="LinearElastic")
         if not -1.0 < nu < 0.5:
             raise ValueError(f"LinearElastic: poisson must lie in (-1, 0.5), got {nu}")
-        finite_number("density", self.density, positive=True, where="LinearElastic")
+        density = finite_number("density", self.density, positive=True, where="LinearElastic")
+        for name, value in (("young", young), ("poisson", nu), ("density", density)):
+            object.__setattr__(self, name, value)  # (frozen: the numbers as floats)
+        check_young(young, "LinearElastic")
+        check_density(density, "LinearElastic")
         if self.plane not in ("stress", "strain"):
             raise ValueError(
                 f"LinearElastic: plane must be 'stress' or 'strain', got {self.plane!r}"

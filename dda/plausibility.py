@@ -1,0 +1,123 @@
+"""Plausibility warnings: inputs that are valid but are most likely a typing mistake.
+
+A careless but expert user types radians for degrees, MPa for Pa, kN/m^3 for kg/m^3, a
+gravity pointing up, a shaking direction that is not a unit vector, or a time step far
+above the contacts' period; each is valid input, and each runs (sometimes for a long time)
+to a wrong answer. The checks here name the input, the value and the likely mistake, as one
+:class:`PlausibilityWarning` each; they never stop a run (``warnings.simplefilter("error",
+dda.PlausibilityWarning)`` makes them errors, ``"ignore"`` silences them).
+
+The ranges are wide on purpose, orders of magnitude around rock and masonry: a warning is
+for a value no real block or joint has, not for an unusual one.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+
+__all__ = ["PlausibilityWarning", "check_angle", "check_density", "check_direction",
+           "check_gravity", "check_time_step", "check_young", "YOUNG_RANGE", "DENSITY_RANGE"]
+
+#: Young's moduli (Pa) between which no warning is given: soft soil to diamond
+YOUNG_RANGE = (1e5, 1e13)
+#: densities (kg/m^3) between which no warning is given: light foams to the densest metals
+DENSITY_RANGE = (100.0, 25_000.0)
+#: a step this many times the shortest contact period gets a warning (the implicit step is
+#: stable at any dt, and Newton's cheapest accurate moving base takes 25 periods a step: the
+#: warning is for a step that skips a hundred)
+DT_PERIODS = 100.0
+
+
+class PlausibilityWarning(UserWarning):
+    """An input that is valid but most likely a mistake (the message says which and why)."""
+
+
+def _warn(message: str, stacklevel: int = 3) -> None:
+    warnings.warn(message, PlausibilityWarning, stacklevel=stacklevel + 1)
+
+
+def check_angle(name: str, value: float, where: str) -> None:
+    """A friction angle (degrees) between 0 and pi/2 looks like radians.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     check_angle("phi", 0.52, "CoulombSingle")
+    >>> print(caught[0].message)  # doctest: +NORMALIZE_WHITESPACE
+    CoulombSingle: phi = 0.52 degrees looks like radians (0.52 rad = 29.8 degrees);
+    angles are in degrees
+    """
+    if 0.0 < value < 0.5 * math.pi:
+        _warn(f"{where}: {name} = {value:g} degrees looks like radians ({value:g} rad = "
+              f"{math.degrees(value):.1f} degrees); angles are in degrees")
+
+
+def check_young(value: float, where: str) -> None:
+    """A Young's modulus orders of magnitude outside rock and masonry (MPa or GPa typed as
+    Pa, or Pa typed as kPa)."""
+    low, high = YOUNG_RANGE
+    if value < low:
+        _warn(f"{where}: young = {value:g} Pa is orders of magnitude below rock and masonry "
+              f"(1e9 to 1e11 Pa); it is in Pa (MPa typed as Pa? {value:g} MPa = "
+              f"{value * 1e6:g} Pa)")
+    elif value > high:
+        _warn(f"{where}: young = {value:g} Pa is orders of magnitude above any rock "
+              "(1e9 to 1e11 Pa); it is in Pa")
+
+
+def check_density(value: float, where: str) -> None:
+    """A density orders of magnitude outside rock and masonry (a unit weight in kN/m^3, or
+    g/cm^3, typed for kg/m^3)."""
+    low, high = DENSITY_RANGE
+    if value < low:
+        _warn(f"{where}: density = {value:g} kg/m^3 is far below rock and masonry (2,000 to "
+              f"3,000 kg/m^3): a unit weight in kN/m^3 ({value:g} kN/m^3 is "
+              f"{value * 1e3 / 9.81:,.0f} kg/m^3) or g/cm^3?")
+    elif value > high:
+        _warn(f"{where}: density = {value:g} kg/m^3 is far above any rock (2,000 to "
+              "3,000 kg/m^3); it is in kg/m^3")
+
+
+def check_gravity(value: float) -> None:
+    """Gravity pointing up, or orders of magnitude off Earth's."""
+    if value < 0.0:
+        _warn(f"Scene: gravity = {value:g} m/s^2 points up: gravity acts in -y, give its "
+              "size (9.81)")
+    elif value > 0.0 and not 0.1 <= value <= 100.0:
+        _warn(f"Scene: gravity = {value:g} m/s^2 is orders of magnitude off Earth's 9.81 "
+              "(in mm/s^2 or g?)")
+
+
+def check_direction(name: str, vector, where: str) -> None:
+    """A direction that is not a unit vector (it scales the amplitude it carries)."""
+    v = np.asarray(vector, dtype=float)
+    size = float(np.hypot(*v)) if v.shape == (2,) else float(np.linalg.norm(v))
+    if size > 0.0 and abs(size - 1.0) > 1e-6:
+        _warn(f"{where}: {name} = {v.tolist()} has length {size:g}, not 1: it multiplies the "
+              f"amplitude by {size:g}; give a unit vector ({(v / size).round(6).tolist()})")
+
+
+def check_time_step(model, dt: float) -> None:
+    """A step far above the shortest contact period ``2 pi sqrt(m / p)`` (the lightest free
+    block on the stiffest joint): its contacts cannot settle, and most steps would be cut."""
+    free = model.free
+    if not free.any() or model.n_blocks < 2:
+        return
+    mass = model.density * model.size ** 2
+    light = int(np.flatnonzero(free)[np.argmin(mass[free])])
+    penalties = model.joints.normal_penalty
+    finite = penalties[np.isfinite(penalties)]
+    if len(finite) == 0:
+        return
+    period = 2.0 * math.pi * math.sqrt(mass[light] / float(finite.max()))
+    if dt > DT_PERIODS * period:
+        _warn(f"Simulation: dt = {dt:g} s is {dt / period:.0f} times the period of "
+              f"{model.block_label(light)} on its stiffest joint ({period:.3g} s, "
+              f"2 pi sqrt(m / p) with p = {finite.max():g} N/m): its contacts cannot settle "
+              f"in a step and most steps would be cut; take dt near {period:.3g} s, a softer "
+              "penalty, or dt='auto'", stacklevel=4)

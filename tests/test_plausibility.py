@@ -1,0 +1,113 @@
+"""Plausibility warnings (dda.plausibility; issue 22, item 1): valid input that is most likely a
+typing mistake gets one warning that names it and the mistake; sensible input gets none; the
+run goes on; numbers typed as text are refused at once."""
+
+import warnings
+
+import pytest
+
+import dda
+from dda.contact import BartonBandis, CoulombSingle, JointMaterial, StaticDynamicTransition
+from dda.io.scene_file import load_scene
+from dda.materials import LinearElastic
+from tests.conftest import box
+from tests.test_scene_file import FULL, write
+
+
+def caught(make):
+    """The plausibility warnings ``make()`` gives (and its result)."""
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        out = make()
+    return [str(w.message) for w in got if w.category is dda.PlausibilityWarning], out
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda: CoulombSingle(phi=0.52), ["CoulombSingle: phi = 0.52 degrees looks like radians "
+                                       "(0.52 rad = 29.8 degrees)"]),
+    (lambda: StaticDynamicTransition(0.7, 0.6), ["phi_static = 0.7 degrees looks like radians",
+                                                  "phi_dynamic = 0.6 degrees looks like"]),
+    (lambda: BartonBandis(jrc=8, jcs=40e6, phi_r=0.5), ["phi_r = 0.5 degrees looks like"]),
+    (lambda: dda.Scene(gravity=-9.81), ["gravity = -9.81 m/s^2 points up"]),
+    (lambda: dda.Scene(gravity=9810.0), ["gravity = 9810 m/s^2 is orders of magnitude off"]),
+    (lambda: LinearElastic(young=5000.0, poisson=0.2, density=2500.0),
+     ["young = 5000 Pa is orders of magnitude below rock", "5000 MPa = 5e+09 Pa"]),
+    (lambda: LinearElastic(young=1e9, poisson=0.2, density=26.0),
+     ["density = 26 kg/m^3 is far below rock", "kN/m^3 (26 kN/m^3 is 2,650 kg/m^3)"]),
+])
+def test_a_likely_mistake_gets_one_warning_naming_it(make, words):
+    got, _ = caught(make)
+    assert len(got) == (2 if "phi_dynamic" in " ".join(words) else 1), got  # one an input
+    text = " | ".join(got)
+    for w in words:
+        assert w in text
+
+
+@pytest.mark.parametrize("make", [
+    lambda: CoulombSingle(phi=30.0), lambda: CoulombSingle(phi=0.0),
+    lambda: StaticDynamicTransition(40.0, 31.6), lambda: dda.Scene(gravity=9.81),
+    lambda: dda.Scene(), lambda: LinearElastic(young=14.9e9, poisson=0.2, density=2198.0),
+    lambda: LinearElastic(young=2e6, poisson=0.3, density=1800.0),  # a soft soil
+])
+def test_sensible_input_gets_none(make):
+    assert caught(make)[0] == []
+
+
+def test_a_shake_direction_that_is_not_a_unit_vector(tmp_path):
+    sine = 'sine = { amplitude = 2.0, frequency = 2.0, start = 0.01 }'
+    text = FULL.replace(sine, sine[:-2] + ', direction = [2.0, 0.0] }')
+    assert text != FULL
+    got, _ = caught(lambda: load_scene(write(tmp_path, text)))
+    assert any("scene.toml, shake[0].sine: direction = [2.0, 0.0] has length 2, not 1: it "
+               "multiplies the amplitude by 2" in g for g in got), got
+    unit = FULL.replace(sine, sine[:-2] + ', direction = [0.6, 0.8] }')
+    assert caught(lambda: load_scene(write(tmp_path, unit, "unit.toml")))[0] == []
+
+
+def _small_block_scene():
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(0, -0.5, 2, 0.5), rock, fixed=True)
+    scene.add_block(box(0.5, 0.0, 0.05, 0.05), rock, name="pebble")
+    scene.set_joint(JointMaterial(1e11, 1e11, CoulombSingle(phi=30.0)))
+    return scene
+
+
+def test_a_step_that_skips_a_hundred_contact_periods():
+    got, _ = caught(lambda: dda.Simulation(_small_block_scene(), dt=0.05))
+    assert len(got) == 1
+    assert "dt = 0.05 s is" in got[0] and "times the period of block 'pebble'" in got[0]
+    assert "dt='auto'" in got[0]
+    assert caught(lambda: dda.Simulation(_small_block_scene(), dt=1e-4))[0] == []
+
+
+def test_warnings_never_stop_a_run():
+    def run():
+        rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+        scene = dda.Scene(gravity=9.81)
+        scene.add_block(box(0, -0.5, 2, 0.5), rock, fixed=True)
+        top = scene.add_block(box(0.5, 0.0, 0.3, 0.3), rock)
+        scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(phi=0.52)))
+        return dda.Simulation(scene, dt=1e-3).run(0.01), top
+
+    got, (result, top) = caught(run)
+    assert len(got) == 1
+    assert len(result.time) == 11 and result.displacement(top).shape == (11, 2)
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda: LinearElastic(young="10e9", poisson=0.2, density=2500.0),
+     "LinearElastic: young must be a number, got the text '10e9'"),
+    (lambda: CoulombSingle(phi="30"), "CoulombSingle: phi must be a number, got the text"),
+    (lambda: dda.Scene(gravity="9.81"), "Scene: gravity must be a number, got the text"),
+])
+def test_numbers_typed_as_text_are_refused_at_once(make, words):
+    with pytest.raises(ValueError, match=words):
+        make()
+
+
+def test_a_scene_files_warnings_name_its_line(tmp_path):
+    text = FULL.replace("density = 2500.0", "density = 26.0", 1)
+    got, _ = caught(lambda: load_scene(write(tmp_path, text)))
+    assert any(g.startswith("scene.toml, line 5, materials.rock: LinearElastic: density = 26")
+               for g in got), got
