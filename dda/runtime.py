@@ -15,7 +15,7 @@ import signal
 import threading
 from contextlib import contextmanager
 
-__all__ = ["BLAS_THREADS", "run_environment", "sigterm_as_interrupt"]
+__all__ = ["BLAS_THREADS", "blas_threads", "run_environment", "sigterm_as_interrupt"]
 
 BLAS_THREADS = 1
 
@@ -25,6 +25,12 @@ def run_environment():
     """SIGTERM as Ctrl-C and ``BLAS_THREADS`` BLAS threads within the block."""
     with sigterm_as_interrupt(), _blas().limit(limits=BLAS_THREADS, user_api="blas"):
         yield
+
+
+def blas_threads():
+    """Context manager: ``BLAS_THREADS`` BLAS threads within the block (threadpoolctl; a
+    sweep's case, :func:`dda.studies.sweep.run_case`)."""
+    return _blas().limit(limits=BLAS_THREADS, user_api="blas")
 
 
 @functools.cache

@@ -157,3 +157,32 @@ def test_csv_and_markdown(tmp_path):
                            {"cpu_time": ".2f", "error": ".1%"})
     assert table.splitlines()[2] == "| a | 1.00 | 50.0% |"
     assert np.isnan(float(back[-1]["error"]))
+
+
+def _blas_threads() -> int:
+    from threadpoolctl import threadpool_info
+
+    return max((p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"),
+               default=1)
+
+
+class CountsBlasThreads(MovingBase):
+    """The moving base, recording the BLAS threads it sees while prepared and measured."""
+
+    def prepare(self, **settings):
+        seen = _blas_threads()
+        sim, duration, error = super().prepare(**settings)
+
+        def measured(result):
+            out = error(result)
+            out = out if isinstance(out, dict) else {"error": out}
+            return {**out, "blas_prepare": seen, "blas_measure": _blas_threads()}
+
+        return sim, duration, measured
+
+
+def test_a_sweeps_cases_run_on_one_blas_thread():
+    """Issue 22, item 7: a case's preparation, run and measures on one BLAS thread (a sweep
+    on two cores must not start four BLAS threads)."""
+    rows = sweep(grid(CountsBlasThreads(duration=0.3), solver=["legacy"], dt=[1e-2]))
+    assert rows[0]["blas_prepare"] == 1 and rows[0]["blas_measure"] == 1

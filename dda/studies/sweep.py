@@ -43,6 +43,7 @@ import numpy as np
 
 from dda import registry
 from dda.profiling import SECTIONS
+from dda.runtime import blas_threads
 from dda.simulation import Simulation, SimulationError
 
 # SOLVERS comes from the module's __getattr__ (the registry's solver names)
@@ -122,9 +123,18 @@ def _cpu_clock():
 
 
 def run_case(case: Case) -> dict:
-    """Run one case and return its row (see :func:`sweep`); a failed run is a row too."""
+    """Run one case and return its row (see :func:`sweep`); a failed run is a row too.
+
+    The whole case (its preparation, its run and its measures) runs with
+    :data:`dda.runtime.BLAS_THREADS` BLAS threads: a sweep's processes, one a core, would
+    otherwise each start a thread a core and fight for them."""
     if not isinstance(case, Case):
         raise TypeError(f"run_case: expected a Case, got {case!r}")
+    with blas_threads():
+        return _run_case(case)
+
+
+def _run_case(case: Case) -> dict:
     sim, duration, error = case.study.prepare(**case.settings)
     clock = _cpu_clock()
     cpu0, wall0 = clock(), time.perf_counter()
