@@ -1,37 +1,46 @@
-"""A progress bar for long runs, as a callback of :meth:`dda.Simulation.run`."""
+"""A progress bar for long runs (tqdm), as a callback of :meth:`dda.Simulation.run`.
+
+It shows the simulated time against the run's end, the time left, and what says whether a run
+is slow or stalled: the step size ``dt`` now, the steps cut so far, and the OPEN-CLOSE passes
+and solves a step (over the last update).
+"""
 
 from __future__ import annotations
 
 import sys
-import time as _time
+
+from tqdm import tqdm
 
 __all__ = ["ProgressBar"]
 
 
 class ProgressBar:
-    """A minimal progress bar on stderr (no dependency): simulated time, share, time left.
+    """Simulated time from ``t_start`` to ``t_end`` on stderr; ``stats`` (the run's
+    :class:`dda.result.StepStats`, optional) gives the cuts.
 
-    Call it with the committed :class:`dda.step.StepState` after every step; ``close()`` ends
-    the line.
+    Call it with the committed :class:`dda.step.StepState` and its report after every step;
+    ``close()`` ends the line.
     """
 
-    def __init__(self, t_end, t_start):
-        self.t_end, self.t_start = t_end, t_start
-        self.start = _time.perf_counter()
-        self.last = 0.0
+    def __init__(self, t_end, t_start, stats=None, file=None):
+        self.t_end, self.t_start, self.stats = t_end, t_start, stats
+        self.last_time = t_start
+        self.passes = self.steps = 0
+        self.bar = tqdm(total=t_end - t_start, initial=0.0, unit="s", unit_scale=False,
+                        file=file or sys.stderr, desc="t", mininterval=0.2, leave=True,
+                        bar_format="{desc} {n:.4f}/{total:.4f} s |{bar}| {percentage:3.0f}% "
+                                   "[{elapsed}<{remaining}{postfix}]")
 
     def __call__(self, state, report=None):
-        t = state.time
-        now = _time.perf_counter()
-        if now - self.last < 0.2 and t < self.t_end:
-            return
-        self.last = now
-        frac = (t - self.t_start) / (self.t_end - self.t_start)
-        bar = "#" * int(30 * frac)
-        eta = (now - self.start) * (1 - frac) / max(frac, 1e-9)
-        sys.stderr.write(f"\r  t = {t:9.4f} s [{bar:<30}] {100 * frac:5.1f}%  eta {eta:6.1f} s")
-        sys.stderr.flush()
+        dt = state.time - self.last_time
+        self.last_time = state.time
+        self.steps += 1
+        if report is not None:
+            self.passes += report.open_close_passes
+        self.bar.set_postfix_str(
+            f"dt {dt:.3g} s, {len(self.stats.cuts) if self.stats is not None else 0} cut, "
+            f"{self.passes / self.steps:.1f} passes/step", refresh=False)
+        self.bar.update(dt)
 
     def close(self):
-        sys.stderr.write("\n")
-        sys.stderr.flush()
+        self.bar.close()

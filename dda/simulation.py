@@ -243,9 +243,9 @@ class Simulation:
         """
         t_end, writer, checkpoint = self._prepare(duration, output, checkpoint,
                                                   checkpoint_every)
-        bar = self._progress_bar(progress, t_end)
         result = Result(self.scene, [b.name for b in self.scene.blocks],
                         record_every=self.record_every)
+        bar = self._progress_bar(progress, t_end, result.stats)
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)
         watchers = [w for w in (bar, callback) if w is not None]
@@ -260,6 +260,10 @@ class Simulation:
             except KeyboardInterrupt:
                 if checkpoint is not None:  # the committed state is whole: keep it
                     self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
+                if bar:
+                    bar.close()
+                    bar = None
+                print(self._stopped(checkpoint), file=sys.stderr, flush=True)
                 raise
             finally:
                 if bar:
@@ -268,12 +272,21 @@ class Simulation:
                     writer.close()
         return result
 
-    def _progress_bar(self, progress, t_end):
+    def _stopped(self, checkpoint) -> str:
+        """The line an interrupted run prints: when it stopped and how to go on."""
+        t = self.committed.time
+        if checkpoint is None:
+            return (f"dda: stopped at t = {t:g} s after {self.control.steps} steps; no "
+                    "checkpoint was set (run(..., checkpoint=PATH) to be able to resume)")
+        return (f"dda: stopped at t = {t:g} s after {self.control.steps} steps; resume with: "
+                f"dda run {checkpoint[0]}")
+
+    def _progress_bar(self, progress, t_end, stats):
         """A progress bar when asked for, or by default for a long run on a terminal."""
         if progress is None:
             steps = (t_end - self.committed.time) / self.dt
             progress = steps > 2000 and sys.stderr.isatty()
-        return ProgressBar(t_end, self.committed.time) if progress else None
+        return ProgressBar(t_end, self.committed.time, stats) if progress else None
 
     def _steps(self, result, t_end, recorder, writer, checkpoint, watchers):
         """Step to ``t_end``: commit, record, checkpoint and tell the watchers each step."""

@@ -162,3 +162,35 @@ def test_a_checkpoint_of_an_older_layout_is_refused_clearly(tmp_path):
     old.write_bytes(pickle.dumps({"version": CHECKPOINT_VERSION - 1, "simulation": None}))
     with pytest.raises(ValueError, match="not a checkpoint of this version of dda"):
         dda.Simulation.resume(old)
+
+
+def test_the_command_stops_on_a_signal_with_one_line_and_how_to_go_on(tmp_path):
+    """Ctrl-C or SIGTERM on 'dda run': the checkpoint is written, one line says when it
+    stopped and the command that resumes it, no traceback (issue 22)."""
+    import time
+
+    from tests.test_scene_file import TABLES
+
+    scene = tmp_path / "tables.toml"
+    scene.write_text(TABLES.replace("duration = 0.03", "duration = 100.0")
+                     .replace("checkpoint_every = 10", "checkpoint_every = 5"))
+    out = tmp_path / "out"
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    proc = subprocess.Popen([sys.executable, "-m", "dda", "run", str(scene), "--out", str(out),
+                             "--no-progress"], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    ckpt = out / "tables.ckpt"
+    deadline = time.time() + 120
+    while not (ckpt.exists() and len(list(out.glob("tables_*.vtu"))) >= 20):
+        assert time.time() < deadline and proc.poll() is None, proc.communicate()
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("dda: stopped at t = ")
+    assert lines[0].endswith(f"resume with: dda run {ckpt}")
+    stopped = dda.Simulation.resume(ckpt).state.time
+    assert f"t = {stopped:g} s" in lines[0]

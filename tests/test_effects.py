@@ -97,7 +97,10 @@ def test_progress_bar_reports_on_stderr(capsys):
     scene.add_block(box(0, 0, 1, 1), ROCK)
     dda.Simulation(scene, dt=1e-2).run(duration=0.5, progress=True)
     err = capsys.readouterr().err
-    assert "100.0%" in err and "t =" in err
+    # the simulated time, the share, and what tells a slow run from a stalled one: dt, the
+    # cuts, the passes a step (issue 22)
+    assert "0.5000/0.5000 s" in err and "100%" in err, err
+    assert "dt 0.01 s, 0 cut, 1.0 passes/step" in err, err
 
 
 @pytest.mark.parametrize(("value", "message"), [

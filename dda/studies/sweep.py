@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from tqdm import tqdm
 
 from dda import registry
 from dda.profiling import SECTIONS
@@ -193,31 +194,27 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
     if own:
         executor = ProcessPoolExecutor(max_workers=min(len(cases), os.cpu_count() or 1) or 1)
     rows: list[dict | None] = [None] * len(cases)
-    start = time.perf_counter()
+    bar = tqdm(total=len(cases), unit="case", file=sys.stderr, disable=not progress,
+               mininterval=0.0, miniters=1)  # (each case shown: they are few and slow)
     try:
         futures = {executor.submit(run_case, c): i for i, c in enumerate(cases)}
-        for done, fut in enumerate(as_completed(futures), start=1):
+        for fut in as_completed(futures):
             i = futures[fut]
             rows[i] = fut.result()
-            if progress:
-                _report(done, len(cases), time.perf_counter() - start, rows[i])
+            bar.set_postfix_str(_label(rows[i]), refresh=False)
+            bar.update(1)
     finally:
+        bar.close()
         if own:
             executor.shutdown(cancel_futures=True)
-        if progress:
-            sys.stderr.write("\n")
     return rows
 
 
-def _report(done, total, elapsed, row):
-    frac = done / total
-    bar = "#" * int(30 * frac)
-    eta = elapsed * (1 - frac) / frac
+def _label(row) -> str:
+    """The settings of a case's row, short (the progress bar's last case)."""
     label = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
                       for k, v in row.items() if k not in _OUTCOME)
-    sys.stderr.write(f"\r  [{bar:<30}] {done}/{total}  {elapsed:6.1f} s, eta {eta:6.1f} s  "
-                     f"{label[:60]:<60}")
-    sys.stderr.flush()
+    return label[:60]
 
 
 _OUTCOME = {"error", "cpu_time", "wall_time", "steps", "iterations", "open_close_passes",
