@@ -9,6 +9,7 @@ from dda.kernels.cache import drop_stale_kernel_caches
 drop_stale_kernel_caches()  # before any kernel loads its compiled code (dda/kernels/cache.py)
 
 from dda import io  # noqa: E402
+from dda.errors import OverlapError  # noqa: E402
 from dda.io.scene_file import load_scene  # noqa: E402
 from dda.result import Result  # noqa: E402
 from dda.scene import Block, Scene  # noqa: E402
@@ -19,6 +20,6 @@ from dda.simulation import (  # noqa: E402
     SimulationError,
 )
 
-__all__ = ["Block", "PenaltyWarning", "PlausibilityWarning", "Result", "Scene", "Simulation",
-           "SimulationError", "io", "load_scene"]
+__all__ = ["Block", "OverlapError", "PenaltyWarning", "PlausibilityWarning", "Result", "Scene",
+           "Simulation", "SimulationError", "io", "load_scene"]
 __version__ = "0.1.0"

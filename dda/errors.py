@@ -1,6 +1,6 @@
 """The errors a run raises."""
 
-__all__ = ["SimulationError"]
+__all__ = ["SimulationError", "OverlapError"]
 
 
 class SimulationError(RuntimeError):
@@ -9,3 +9,13 @@ class SimulationError(RuntimeError):
     def __init__(self, message, result=None):
         super().__init__(message)
         self.result = result
+
+
+class OverlapError(ValueError):
+    """Blocks that overlap at the start: ``blocks`` are the two handles, ``depth`` (m) how far
+    the deeper one's deepest point lies inside the other."""
+
+    def __init__(self, message, blocks=None, depth=None):
+        super().__init__(message)
+        self.blocks = blocks
+        self.depth = depth

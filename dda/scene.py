@@ -8,13 +8,14 @@ import numpy as np
 
 from dda import geometry
 from dda._checks import finite_number, finite_vector
-from dda.contact.detection import find_overlaps
+from dda.contact.detection import overlap_depths
 from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
+from dda.errors import OverlapError
 from dda.materials import LinearElastic
 from dda.plausibility import check_gravity
 
-__all__ = ["Block", "Scene", "MAX_BLOCKS", "MAX_VERTICES"]
+__all__ = ["Block", "Scene", "MAX_BLOCKS", "MAX_VERTICES", "OVERLAP_TOLERANCE"]
 
 #: the most blocks a scene takes, and vertices a block (Scene's defaults): far beyond any
 #: real scene (the 10,000-block benchmarks, polygons of tens of corners), they stop a mistyped
@@ -22,6 +23,10 @@ __all__ = ["Block", "Scene", "MAX_BLOCKS", "MAX_VERTICES"]
 #: instead of running out of memory or time
 MAX_BLOCKS = 1_000_000
 MAX_VERTICES = 100_000
+#: blocks overlapping at the start by less than this fraction of the smaller one's size count
+#: as touching: coordinates typed with 6 decimals put neighbours about 1e-7 m into each other,
+#: and their contacts take that up in the first step
+OVERLAP_TOLERANCE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -448,13 +453,17 @@ class Scene:
                     "the scene has no default joint: call scene.set_joint(JointMaterial(...))"
                 )
         verts, offsets = self.vertex_arrays()
-        bad = find_overlaps(verts, offsets)
+        bad = overlap_depths(verts, offsets, OVERLAP_TOLERANCE)
         if bad:
-            a, b = bad[0]
-            raise ValueError(
-                f"{self._handles[a]} and {self._handles[b]} overlap at the start; blocks may "
-                "touch but not overlap"
-            )
+            a, b, depth = max(bad, key=lambda abd: abd[2])
+            sizes = [np.ptp(self._blocks[i].vertices, axis=0).max() for i in (a, b)]
+            more = f" (and {len(bad) - 1} more pairs)" if len(bad) > 1 else ""
+            raise OverlapError(
+                f"{self._handles[a]} and {self._handles[b]} overlap at the start by "
+                f"{depth:.3g} m, {depth / min(sizes):.2g} of the smaller block's size"
+                f"{more}; blocks may touch but not overlap (an overlap under "
+                f"{OVERLAP_TOLERANCE:g} of the smaller block's size counts as touching)",
+                blocks=(self._handles[a], self._handles[b]), depth=depth)
 
     def vertex_arrays(self) -> tuple[np.ndarray, np.ndarray]:
         """All vertices stacked (n_vertices, 2) and the CSR offsets of the blocks."""

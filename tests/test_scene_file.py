@@ -421,3 +421,17 @@ def test_the_command_needs_the_option_to_write_outside(tmp_path, capsys):
     assert main(["run", str(f), "--duration", "0.002", "--no-progress",
                  "--allow-outside-output"]) == 0
     assert (tmp_path / "elsewhere" / "tables.pvd").is_file()
+
+
+def test_an_overlap_points_at_the_blocks_lines(tmp_path):
+    """Blocks that overlap at the start: the error is at the second block's table, names the
+    first one's line, and says how deep (it used to point at [simulation])."""
+    text = FULL.replace("vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]",
+                        "vertices = [[1, 0.99], [2, 0.99], [2, 2], [1, 2]]")
+    f = write(tmp_path, text)
+    base = text.splitlines().index('name = "base"') + 1   # dedent keeps the lines
+    top = text.splitlines().index('name = "top"') + 1
+    with pytest.raises(SceneFileError, match=rf"scene.toml, line {top - 1}, blocks\[1\]: "
+                       rf"block 'base' and block 'top' overlap at the start by 0.01 m.*"
+                       rf"\('base' is at line {base - 1}\)"):
+        load_scene(f)

@@ -157,3 +157,60 @@ def test_effect_conflicts_and_unknown_blocks():
     with pytest.raises(ValueError, match="displacement"):
         scene.prescribe_motion(scene.add_block(box(4, 0, 1, 1), ROCK),
                                displacement=lambda t: (1.0 + t, None))
+
+
+def _incline_scene(digits=None, shift=0.0):
+    """A 1 m block on a 30 degree incline, its corners typed with ``digits`` decimals (or
+    exact) and pushed ``shift`` m into the incline along its normal."""
+    t = np.radians(30.0)
+    along, normal = np.array([np.cos(t), np.sin(t)]), np.array([-np.sin(t), np.cos(t)])
+    foot = 1.0 * along - shift * normal
+    top = [foot, foot + along, foot + along + normal, foot + normal]
+    if digits is not None:
+        top = np.round(top, digits)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(0, 0), (4 * np.cos(t), 0), (4 * np.cos(t), 4 * np.sin(t))], ROCK,
+                    fixed=True, name="incline")
+    scene.add_block([tuple(p) for p in top], ROCK, name="block")
+    scene.set_joint(JOINT)
+    return scene
+
+
+def test_geometry_typed_with_six_decimals_runs():
+    """Corners typed with 6 decimals leave the block 4e-7 m into the incline (under 1e-6 of
+    its 1 m): the scene runs and the contact takes the overlap up, as a block set down exactly
+    does. (With the tolerance at 1e-9 of the model's size this scene was refused.)"""
+    typed = _incline_scene(digits=6, shift=4e-7)
+    exact = _incline_scene()
+    moved = []
+    for scene in (typed, exact):
+        result = dda.Simulation(scene, dt=1e-3).run(0.05)
+        moved.append(result.displacement(scene.block("block"))[-1])
+    # phi 30 on 30 degrees: the block creeps; the typed one as the exact one, to the overlap
+    np.testing.assert_allclose(moved[0], moved[1], atol=2e-6)
+
+
+def test_overlap_message_gives_the_depth_and_the_smaller_blocks_share():
+    """2 mm into the incline; the tilted block's size is its bounding box's side, 1.366 m."""
+    scene = _incline_scene(shift=2e-3)
+    with pytest.raises(dda.OverlapError,
+                       match=r"'incline' and .*'block' overlap at the start by 0.002 m, "
+                             r"0.0015 of the smaller block's size") as info:
+        dda.Simulation(scene, dt=1e-3)
+    assert info.value.depth == pytest.approx(2e-3, rel=1e-9)
+    assert [b.name for b in info.value.blocks] == ["incline", "block"]
+
+
+def test_the_tolerance_follows_the_smaller_block():
+    """A pebble of 1 cm 1e-7 m into a 100 m base overlaps (1e-5 of its size); a 1 m block as
+    deep does not (1e-7 of its size)."""
+    for size, refused in ((0.01, True), (1.0, False)):
+        scene = dda.Scene()
+        scene.add_block(box(0, 0, 100, 10), ROCK, name="base", fixed=True)
+        scene.add_block(box(50, 10 - 1e-7, size, size), ROCK, name="stone")
+        scene.set_joint(JOINT)
+        if refused:
+            with pytest.raises(ValueError, match=r"overlap at the start by 1e-07 m, 1e-05"):
+                dda.Simulation(scene, dt=1e-3)
+        else:
+            dda.Simulation(scene, dt=1e-3)

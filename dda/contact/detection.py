@@ -50,8 +50,8 @@ from dda.geometry import _segments_cross, next_vertex_index, polygon_integrals
 from dda.kernels.geometry import vertex_turns
 from dda.kernels.kinematics import _frame
 
-__all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "CandidateContacts",
-           "inside_depth", "keep_closed"]
+__all__ = ["VertexTopology", "broad_phase", "narrow_phase", "find_overlaps", "overlap_depths",
+           "CandidateContacts", "inside_depth", "keep_closed"]
 
 ENTRANCE_TOLERANCE_DEG = 20.0
 # a closed contact's mirror (keep_closed) lies along the same joint: its edge runs against the
@@ -1024,49 +1024,64 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
     return out_v[:n_out].copy(), out_k[:n_out].copy(), out_d[:n_out].copy(), out_e[:n_out].copy()
 
 
-def _strictly_inside(p, kblock, x, offsets, nxt, tol):
-    """Whether each point p (n, 2) lies inside block kblock (n,) farther than tol from its
-    boundary."""
-    inside, depth, _ = inside_depth(p, kblock, x, offsets, nxt)
-    return inside & (depth > tol)
+def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-6) -> list:
+    """Pairs of blocks whose interiors overlap (touching along edges or at corners is fine):
+    the pairs of :func:`overlap_depths`, sorted."""
+    return [(a, b) for a, b, _ in overlap_depths(x, offsets, rel_tol)]
 
 
-def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9) -> list:
-    """Pairs of blocks whose interiors overlap (touching along edges or at corners is fine).
+def overlap_depths(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-6) -> list:
+    """Pairs of blocks whose interiors overlap, and how deep.
 
     Two simple polygons overlap when a vertex, an edge midpoint or the centroid of one lies
-    strictly inside the other, or two of their edges cross properly. (Vertices and crossings
-    alone miss a block laid exactly on another, or inside it along shared edges.) Used once,
-    to check a scene before a run.
+    inside the other, or two of their edges cross. (Vertices and crossings alone miss a block
+    laid exactly on another, or inside it along shared edges.) A pair overlaps only deeper
+    than ``rel_tol`` times the smaller block's size (the larger side of its bounding box), so
+    coordinates typed with 6 decimals that leave blocks 1e-7 m into each other count as
+    touching: the contacts take such an overlap up at the first step.
+
+    The depth of a pair is that of its deepest point inside the other block: a vertex or edge
+    midpoint's distance to the other block's boundary, or for two crossing edges the smaller
+    distance of an edge's end past the other edge's line, :math:`\\min(|d_1|, |d_2|) / |q|`
+    with :math:`d` the cross products of the orientation test. Used once, to check a scene
+    before a run.
+
+    Returns
+    -------
+    list of (int, int, float)
+        ``(a, b, depth)`` with a < b, sorted by pair; depth in the coordinates' unit.
     """
     topo = VertexTopology.from_offsets(offsets)
     boxes = bounding_boxes(x, offsets)
     pairs = broad_phase(boxes, 0.0)
     if len(pairs) == 0:
         return []
-    size = np.max(boxes[:, 2:] - boxes[:, :2])
-    tol = rel_tol * size
-    bad = set()
+    size = np.max(boxes[:, 2:] - boxes[:, :2], axis=1)  # each block's size
+    deepest: dict = {}
 
-    def mark(block_a, block_b):
-        for a, b in zip(block_a.tolist(), block_b.tolist(), strict=True):
-            bad.add((min(a, b), max(a, b)))
+    def mark(block_a, block_b, depth):
+        tol = rel_tol * np.minimum(size[block_a], size[block_b])
+        keep = depth > tol
+        for a, b, d in zip(block_a[keep].tolist(), block_b[keep].tolist(),
+                           depth[keep].tolist(), strict=True):
+            key = (min(a, b), max(a, b))
+            deepest[key] = max(deepest.get(key, 0.0), d)
 
-    # vertices and edge midpoints of j strictly inside k
+    # vertices and edge midpoints of j inside k
     vertex, kblock = _directed_vertex_block_pairs(pairs, topo, x, boxes, 0.0)
     for points in (x[vertex], 0.5 * (x[vertex] + x[topo.nxt[vertex]])):
-        inside = _strictly_inside(points, kblock, x, offsets, topo.nxt, tol)
-        mark(topo.block[vertex[inside]], kblock[inside])
-    # a block's centroid (when it lies inside the block) strictly inside the other block
+        inside, depth, _ = inside_depth(points, kblock, x, offsets, topo.nxt)
+        mark(topo.block[vertex[inside]], kblock[inside], depth[inside])
+    # a block's centroid (when it lies inside the block) inside the other block
     centroid = polygon_integrals(x, offsets, topo.nxt).centroid
     j = np.concatenate([pairs[:, 0], pairs[:, 1]])
     k = np.concatenate([pairs[:, 1], pairs[:, 0]])
-    own = _strictly_inside(centroid[j], j, x, offsets, topo.nxt, tol)
-    inside = own & _strictly_inside(centroid[j], k, x, offsets, topo.nxt, tol)
-    mark(j[inside], k[inside])
-    # proper edge crossings between the two blocks of a pair
-    # every edge of one block against every edge of the other (no box filter: an edge may
-    # cross a box whose corners all lie outside it)
+    own, _, _ = inside_depth(centroid[j], j, x, offsets, topo.nxt)
+    inside, depth, _ = inside_depth(centroid[j], k, x, offsets, topo.nxt)
+    inside &= own
+    mark(j[inside], k[inside], depth[inside])
+    # edge crossings between the two blocks of a pair: every edge of one block against every
+    # edge of the other (no box filter: an edge may cross a box whose corners all lie outside)
     e1, blk2 = _directed_vertex_block_pairs(pairs, topo, x, boxes, np.inf)
     e1, e2 = _expand_to_edges(e1, blk2, offsets)
     p1, p2 = x[e1], x[topo.nxt[e1]]
@@ -1075,14 +1090,13 @@ def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-9) -> 
     def orient(u, v, w):
         return (v[:, 0] - u[:, 0]) * (w[:, 1] - u[:, 1]) - (v[:, 1] - u[:, 1]) * (w[:, 0] - u[:, 0])
 
-    area_tol = tol * size
     d1, d2 = orient(q1, q2, p1), orient(q1, q2, p2)
     d3, d4 = orient(p1, p2, q1), orient(p1, p2, q2)
     proper = (d1 * d2 < 0) & (d3 * d4 < 0)
-    proper &= (np.minimum(np.abs(d1), np.abs(d2)) > area_tol) & (
-        np.minimum(np.abs(d3), np.abs(d4)) > area_tol
-    )
-    for v1, v2 in zip(e1[proper].tolist(), e2[proper].tolist(), strict=True):
-        ba, bb = int(topo.block[v1]), int(topo.block[v2])
-        bad.add((min(ba, bb), max(ba, bb)))
-    return sorted(bad)
+    lp = np.hypot(*(p2 - p1).T)
+    lq = np.hypot(*(q2 - q1).T)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        depth = np.minimum(np.minimum(np.abs(d1), np.abs(d2)) / lq,
+                           np.minimum(np.abs(d3), np.abs(d4)) / lp)
+    mark(topo.block[e1[proper]], topo.block[e2[proper]], depth[proper])
+    return [(a, b, deepest[(a, b)]) for a, b in sorted(deepest)]

@@ -232,6 +232,8 @@ class _Reader:
 
     name: str
     lines: dict
+    #: the path of the table that made each block, by block name (for errors about blocks)
+    origin: dict = field(default_factory=dict)
 
     def error(self, path: tuple, message: str) -> SceneFileError:
         line = None
@@ -300,6 +302,8 @@ class _Reader:
             warnings.simplefilter("always", PlausibilityWarning)
             try:
                 out = fn(*args, **kwargs)
+            except SceneFileError:
+                raise
             except (ValueError, TypeError) as exc:
                 raise self.error(path, str(exc)) from None
         for w in caught:
@@ -457,8 +461,24 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     loaded = LoadedScene(scene, blocks, solver, settings, duration, path=path, effects=effects,
                          **output)
     # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
-    r.call(("simulation",), loaded.simulation)
+    r.call(("simulation",), _at_block_lines, r, loaded.simulation)
     return loaded
+
+
+def _at_block_lines(r, make):
+    """``make()``, with an overlap of blocks at the start reported at the second block's
+    table, the first's line named too."""
+    from dda.errors import OverlapError
+
+    try:
+        return make()
+    except OverlapError as exc:
+        first, second = (r.origin.get(b.name) for b in exc.blocks)
+        if second is None:
+            raise
+        line = r.lines.get(first) if first is not None else None
+        also = f" ('{exc.blocks[0].name}' is at line {line})" if line else ""
+        raise r.error(second, f"{exc}{also}") from None
 
 
 # ---------------------------------------------------------------------- one reader a table
@@ -538,6 +558,7 @@ def _read_blocks(r, data, materials, add_block, keys) -> dict:
         h = r.call(p, add_block, r.points(b, p, "vertices"), _material(r, materials, b, p),
                    name=b.get("name"), **kwargs)
         blocks[h.name] = h
+        r.origin[h.name] = p
     return blocks
 
 
@@ -566,6 +587,7 @@ def _read_cuts(r, data, materials, add_block) -> dict:
             h = r.call(p, add_block, poly, mat, name=f"{prefix}{k}",
                        fixed=_bool(r, c, p, "fixed"), rigid=_bool(r, c, p, "rigid"))
             blocks[h.name] = h
+            r.origin[h.name] = p
     return blocks
 
 
