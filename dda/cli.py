@@ -112,10 +112,30 @@ def cmd_render(args):
     return 0
 
 
-def describe(loaded, timed_steps: int = 30, budget: float = 2.0) -> str:
+def _time_steps(sim, steps: int, budget: float):
+    """Run ``sim`` for its first steps and time them: the start-up (3 steps, in which the
+    compiled kernels load), then chunks of doubling length while ``budget`` seconds last.
+    Returns (seconds per step after the start-up, the start-up's seconds, steps timed after
+    it, start-up steps)."""
+    warm = min(3, steps)
+    start = time.perf_counter()
+    sim.run(warm * sim.dt, progress=False)
+    startup = time.perf_counter() - start
+    done, spent, chunk = 0, 0.0, 1
+    while done < steps - warm and spent < budget:
+        n = min(chunk, steps - warm - done)
+        start = time.perf_counter()
+        done += len(sim.run(n * sim.dt, progress=False).stats)
+        spent += time.perf_counter() - start
+        chunk *= 2
+    return (spent / done if done else 0.0), startup, done, warm
+
+
+def describe(loaded, budget: float = 2.0) -> str:
     """What ``dda info`` prints: blocks, joints, effects, contacts at the start, and the cost
-    estimated from steps actually run: a few untimed (the first ones load the compiled kernels
-    and settle the start), then up to ``timed_steps`` or ``budget`` seconds of them timed."""
+    estimated from steps actually run: the first 3 (the compiled kernels load: a start-up cost
+    every run pays), then as many as ``budget`` seconds allow, the run's own cost when that is
+    all of them, and one VTU frame's write times the frames."""
     from dda.contact.detection import narrow_phase
 
     scene = loaded.scene
@@ -145,14 +165,7 @@ def describe(loaded, timed_steps: int = 30, budget: float = 2.0) -> str:
               for k, line in enumerate(sim.choices.splitlines())]
     if loaded.duration is not None:
         steps = int(np.ceil(loaded.duration / sim.dt - 1e-9))
-        warm = min(3, steps)
-        sim.run(warm * sim.dt, progress=False)  # (untimed: the kernels load, the start)
-        done, spent = 0, 0.0
-        while done < min(timed_steps, steps - warm) and spent < budget:
-            start = time.perf_counter()
-            done += len(sim.run(sim.dt, progress=False).stats)
-            spent += time.perf_counter() - start
-        per_step = spent / done if done else 0.0
+        per_step, startup, done, warm = _time_steps(sim, steps, budget)
         # 'dda run' writes a VTU frame every [output] every steps: time one
         frames = steps // max(loaded.every, 1) + 1
         with tempfile.TemporaryDirectory() as folder:
@@ -163,12 +176,13 @@ def describe(loaded, timed_steps: int = 30, budget: float = 2.0) -> str:
                 writer.write(sim.frame())
                 times.append(time.perf_counter() - start)
             writer.close()
-            per_frame = min(times)
-        total = per_step * steps + per_frame * frames
+            per_frame = float(np.mean(times[1:]))
+        total = startup + per_step * (steps - warm) + per_frame * frames
+        timed = ("all of them" if warm + done == steps else
+                 f"steps {warm + 1} to {warm + done}; cuts add more")
         lines.append(f"cost       {loaded.duration:g} s = {steps} steps; about {total:.3g} s: "
-                     f"{1e3 * per_step:.3g} ms per step (timed on steps {warm + 1} to "
-                     f"{warm + done}; cuts add more) and {1e3 * per_frame:.3g} ms for each of "
-                     f"{frames} VTU frames")
+                     f"{startup:.2g} s to start, {1e3 * per_step:.3g} ms per step (timed on "
+                     f"{timed}) and {1e3 * per_frame:.3g} ms for each of {frames} VTU frames")
     return "\n".join(lines)
 
 
