@@ -1,18 +1,23 @@
 """Results as data (issue 22, item 5): Result.to_xarray(), StepStats.to_pandas() and sweep
-rows as a DataFrame; the NetCDF round trip."""
+rows as a DataFrame and a rounded table; the NetCDF round trip."""
 
 from __future__ import annotations
 
+import math
 import re
 import sys
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
 
 import dda
 from dda.contact import CoulombSingle, JointMaterial
+from dda.data import format_rows
 from dda.materials import LinearElastic
 from dda.result import StepStats, _normal_and_shear
+from dda.studies.studies import MovingBase
+from dda.studies.sweep import Case, Study, SweepRows, grid, pareto_front, sweep
 from tests.conftest import box, incline_scene
 
 xr = pytest.importorskip("xarray")
@@ -180,6 +185,81 @@ def test_empty_stats_give_an_empty_frame_with_the_columns():
     assert len(frame) == 0 and list(frame.columns) == list(StepStats.FIELDS)
 
 
+# ------------------------------------------------------------------------- sweep rows
+class Stops(Study):
+    """A run that fails at once: its row has NaN error and a long status."""
+
+    name = "stops"
+
+    def prepare(self, dt=1e-2):
+        scene = dda.Scene()
+        scene.add_block(box(0, 0, 1, 1), LinearElastic(young=1e9, poisson=0.2, density=1e3),
+                        velocity=(10.0, 0.0))
+        return dda.Simulation(scene, dt=dt, max_displacement_ratio=1e-9), 0.1, lambda r: 0.0
+
+
+@pytest.fixture(scope="module")
+def rows():
+    cases = grid(MovingBase(duration=0.1), solver=["legacy", "newton"], dt=[1e-2],
+                 penalty=[2e9]) + [Case(Stops(), {"dt": 1e-2})]
+    with ThreadPoolExecutor(1) as pool:
+        return sweep(cases, executor=pool, progress=False)
+
+
+def test_sweep_rows_stay_a_list_of_dicts(rows):
+    assert isinstance(rows, SweepRows) and isinstance(rows, list)
+    assert [r["solver"] for r in rows[:2]] == ["legacy", "newton"]
+    assert all(isinstance(r, dict) for r in rows)
+    assert rows == [dict(r) for r in rows]
+
+
+def test_the_sweep_frame_is_the_rows(rows):
+    frame = rows.to_pandas()
+    assert list(frame.columns) == list(dict.fromkeys(k for r in rows for k in r))
+    assert len(frame) == len(rows) == 3
+    for i, row in enumerate(rows):
+        for key, value in row.items():
+            got = frame[key].iloc[i]
+            if isinstance(value, float) and math.isnan(value):
+                assert math.isnan(got), key
+            else:
+                assert got == value, key
+    assert math.isnan(frame.loc[2, "solver"])  # the failing study has no solver setting
+    assert frame["steps"].dtype == np.int64 and frame["cpu_time"].dtype == np.float64
+    assert frame.attrs["units"]["cpu_time"] == "s" and frame.attrs["units"]["dt"] == "s"
+
+
+def test_printed_rows_are_rounded(rows):
+    text = str(rows)
+    assert repr(rows) == text
+    header, *lines = text.splitlines()
+    assert header.split()[:4] == ["study", "solver", "dt", "penalty"]
+    assert "detection_time" not in header  # the parts' seconds: to_pandas()
+    assert len(lines) == 3
+    numbers = re.findall(r"\d+\.\d+(?:e[-+]\d+)?", text)
+    assert numbers and all(len(n.split("e")[0].replace(".", "").lstrip("0")) <= 4
+                           for n in numbers), numbers
+    assert f"{rows[0]['cpu_time']!r}" not in text  # not the unrounded float
+    assert "failed at t = 0 s" in lines[2] and lines[2].rstrip().endswith("...")
+    assert " nan " in lines[2]
+    assert "detection_time" in rows.table(columns=["solver", "detection_time"])
+
+
+def test_the_pareto_front_prints_rounded_too(rows):
+    front = pareto_front(rows)
+    assert isinstance(front, SweepRows) and len(front) >= 1
+    assert str(front).splitlines()[1:] == str(SweepRows(front)).splitlines()[1:]
+    assert f"{front[0]['error']!r}" not in str(front)
+
+
+def test_format_rows_rounds_to_the_digits_asked():
+    rows = [{"a": 1 / 3, "b": 12345.678, "c": "x"}, {"a": math.nan, "b": 2}]
+    assert format_rows(rows, digits=3) == ("    a         b  c\n"
+                                           "0.333  1.23e+04  x\n"
+                                           "  nan         2")
+    assert str(SweepRows()) == "SweepRows([])"
+
+
 # ------------------------------------------------------------------------- the extra
 @pytest.mark.parametrize("module", ["xarray", "pandas"])
 def test_a_missing_package_names_the_extra(module, monkeypatch, sliding):
@@ -192,7 +272,7 @@ def test_a_missing_package_names_the_extra(module, monkeypatch, sliding):
 def test_import_dda_does_not_import_xarray_or_pandas():
     import subprocess
 
-    code = ("import sys, dda; "
+    code = ("import sys, dda, dda.studies.sweep; "
             "print(sorted(m for m in ('xarray', 'pandas') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
