@@ -216,6 +216,31 @@ class StepStats:
     def keys(self):
         return self.FIELDS
 
+    def to_pandas(self):
+        """The statistics as a :class:`pandas.DataFrame`: one row a step, one column a field.
+
+        Needs the optional ``pandas`` (``pip install 'dda[data]'``). The index is ``step``
+        (0 for the run's first step); the columns are :attr:`FIELDS` in their order: ``time``
+        (s, at the end of the step) and ``dt`` (s) as float64, the counts as int64, the
+        depths (m) and the seconds as float64. ``df.attrs["units"]`` gives each column's
+        unit ("1" for a count). The timings are each interval of ``timing_every`` steps'
+        mean (exact per step when every step is recorded). ``residual_norms`` and ``cuts``
+        stay here: they are not one value a step.
+
+        Examples
+        --------
+        >>> stats = StepStats()
+        >>> stats.append(**{k: 1 for k in StepStats.FIELDS})
+        >>> df = stats.to_pandas()
+        >>> df[["time", "dt", "contacts"]].to_dict("records")
+        [{'time': 1.0, 'dt': 1.0, 'contacts': 1}]
+        >>> df.attrs["units"]["wall_time"], df.attrs["units"]["contacts"]
+        ('s', '1')
+        """
+        from dda.data import stats_frame
+
+        return stats_frame(self)
+
     def summary(self) -> str:
         if not len(self):
             return "no steps"
@@ -225,6 +250,19 @@ class StepStats:
             f"{self['iterations'].sum()} iterations, max {self['open_close_passes'].max()} "
             f"OPEN-CLOSE passes, {len(self.cuts)} dt cuts"
         )
+
+
+def _normal_and_shear(force: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """(..., 2) normal and shear component of the pair forces ``force`` (..., 2) along the
+    unit vector of ``normal`` (..., 2) and that vector turned clockwise by 90 degrees; zero
+    where ``normal`` is zero (see :meth:`Result.joint_force`)."""
+    norm = np.hypot(normal[..., 0], normal[..., 1])
+    safe = np.where(norm == 0.0, 1.0, norm)
+    nx, ny = normal[..., 0] / safe, normal[..., 1] / safe
+    fx, fy = force[..., 0], force[..., 1]
+    out = np.stack([fx * nx + fy * ny, fx * ny - fy * nx], axis=-1)
+    out[norm == 0.0] = 0.0
+    return out
 
 
 def _grown(a: np.ndarray, size: int) -> np.ndarray:
@@ -241,9 +279,15 @@ class Result:
     Blocks are given by handle, name or index.
     """
 
-    def __init__(self, scene, block_names, record_every: int = 1):
+    def __init__(self, scene, block_names, record_every: int = 1, settings=None,
+                 initial_centroid=None):
         self._scene = scene
         self._names = list(block_names)
+        # what the run was (dt, solver, ...) and where the blocks' centroids started: the
+        # attributes and the initial_centroid of :meth:`to_xarray`
+        self._settings = dict(settings or {})
+        self._centroid0 = (None if initial_centroid is None
+                           else np.array(initial_centroid, dtype=np.float64).reshape(-1, 2))
         self._time: list[float] = []
         self._disp: list[np.ndarray] = []
         self._rot: list[np.ndarray] = []
@@ -304,19 +348,13 @@ class Result:
         """
         ia, ib = self._index(a), self._index(b)
         key = int(pair_key(ia, ib, len(self._names)))
-        out = np.zeros((len(self._time), 2))
-        for i, (keys, force, normal) in enumerate(self._pairs):
+        force = np.zeros((len(self._time), 2))  # on the higher-index block from the other
+        normal = np.zeros((len(self._time), 2))
+        for i, (keys, f, n) in enumerate(self._pairs):
             pos = np.searchsorted(keys, key)
             if pos < len(keys) and keys[pos] == key:
-                n = normal[pos]
-                norm = np.hypot(*n)
-                if norm == 0.0:
-                    continue
-                n = n / norm
-                f = force[pos]  # force on the higher-index block from the other
-                out[i, 0] = f @ n
-                out[i, 1] = f @ np.array([n[1], -n[0]])
-        return out
+                force[i], normal[i] = f[pos], n[pos]
+        return _normal_and_shear(force, normal)
 
     @property
     def scene(self):
@@ -341,6 +379,68 @@ class Result:
 
     def __repr__(self):
         return f"Result({len(self._time)} recorded steps, {len(self._names)} blocks)"
+
+    # ---------------------------------------------------------------- as data
+    def _history(self, rows: list, shape: tuple) -> np.ndarray:
+        """(n, n_blocks, *shape) the recorded per-block arrays ``rows``, stacked."""
+        if not rows:
+            return np.zeros((0, len(self._names), *shape))
+        return np.stack(rows).reshape(len(rows), len(self._names), *shape)
+
+    def _joint_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every pair that carried a force at some recorded step: its sorted
+        :func:`~dda.contact.contacts.pair_key` (m,) and its normal and shear force
+        (n, m, 2), as :meth:`joint_force` gives them (zero where the pair carried none)."""
+        n_time = len(self._time)
+        counts = np.array([len(k) for k, _, _ in self._pairs], dtype=np.int64)
+        if counts.sum() == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros((n_time, 0, 2))
+        keys = np.concatenate([k for k, _, _ in self._pairs])
+        unique, column = np.unique(keys, return_inverse=True)
+        force = np.zeros((n_time, len(unique), 2))
+        normal = np.zeros((n_time, len(unique), 2))
+        row = np.repeat(np.arange(n_time), counts)
+        force[row, column] = np.concatenate([f for _, f, _ in self._pairs]).reshape(-1, 2)
+        normal[row, column] = np.concatenate([n for _, _, n in self._pairs]).reshape(-1, 2)
+        return unique, _normal_and_shear(force, normal)
+
+    def to_xarray(self):
+        """The recorded history as an :class:`xarray.Dataset` (time x block x component).
+
+        Needs the optional ``xarray`` (``pip install 'dda[data]'``). Every variable has
+        ``units`` (SI) and ``long_name`` attributes; the dataset's attributes say what the run
+        was (dt, solver, analysis, record_every, gravity, steps, dt cuts, dda version,
+        creation time). ``ds.to_netcdf("run.nc")`` writes it (NetCDF3 through scipy when
+        netCDF4 is not installed; block names survive as UTF-8 strings).
+
+        Returns
+        -------
+        xarray.Dataset
+            Dimensions ``time`` (s), ``block`` (the block names; ``block_id`` is their
+            index), ``component`` (x, y), ``tensor_component`` (xx, yy, xy), ``pair`` (the
+            block pairs that carried a force at some recorded step, labelled "a/b", with
+            ``block_a``, ``block_b`` and their ids) and ``force_component`` (normal, shear).
+            Variables: ``displacement``, ``rotation``, ``velocity``, ``angular_velocity``,
+            ``strain_rate``, ``stress``, ``initial_centroid`` and ``joint_force``; see
+            :mod:`dda.data` for each one's meaning.
+
+        Examples
+        --------
+        >>> import dda
+        >>> from dda.materials import LinearElastic
+        >>> scene = dda.Scene(gravity=9.81)
+        >>> b = scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)],
+        ...                     LinearElastic(young=1e9, poisson=0.2, density=1000.0),
+        ...                     name="falling")
+        >>> ds = dda.Simulation(scene, dt=0.01).run(duration=0.1).to_xarray()
+        >>> ds.displacement.dims, ds.displacement.attrs["units"]
+        (('time', 'block', 'component'), 'm')
+        >>> round(float(ds.displacement.sel(block="falling", component="y")[-1]), 6)
+        -0.04905
+        """
+        from dda.data import result_dataset
+
+        return result_dataset(self)
 
 
 @dataclass

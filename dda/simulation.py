@@ -192,6 +192,12 @@ class Simulation:
         return StepSettings(self.velocity_carry, self.max_open_close,
                             self.max_displacement_ratio, self.penetration_tolerance)
 
+    def _run_settings(self) -> dict:
+        """What a run's :class:`Result` says it was (:meth:`Result.to_xarray`'s attributes)."""
+        return {"dt": float(self.dt), "solver": repr(self.solver), "analysis": self.analysis,
+                "velocity_carry": float(self.velocity_carry),
+                "record_every": int(self.record_every), "choices": self.choices}
+
     def energy(self):
         """The mechanical energy of the committed state (:func:`dda.energy.energy`)."""
         from dda.energy import energy
@@ -244,7 +250,8 @@ class Simulation:
         t_end, writer, checkpoint = self._prepare(duration, output, checkpoint,
                                                   checkpoint_every)
         result = Result(self.scene, [b.name for b in self.scene.blocks],
-                        record_every=self.record_every)
+                        record_every=self.record_every, settings=self._run_settings(),
+                        initial_centroid=self.model.centroid_initial)
         bar = self._progress_bar(progress, t_end, result.stats)
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)

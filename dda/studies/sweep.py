@@ -48,8 +48,8 @@ from dda.runtime import blas_threads
 from dda.simulation import Simulation, SimulationError
 
 # SOLVERS comes from the module's __getattr__ (the registry's solver names)
-__all__ = ["Study", "Case", "grid", "run_case", "sweep", "write_csv", "markdown_table",
-           "pareto_front", "cheapest",
+__all__ = ["Study", "Case", "grid", "run_case", "sweep", "SweepRows", "write_csv",
+           "markdown_table", "pareto_front", "cheapest",
            "SOLVERS"]  # noqa: F822
 
 
@@ -162,8 +162,52 @@ def _run_case(case: Case) -> dict:
     return row
 
 
+class SweepRows(list):
+    """A sweep's rows: a list of dicts, one a case, that prints as a rounded table.
+
+    It is a list (iterate, index, sort, filter, pickle it as one); ``print(rows)`` and the
+    interpreter show :meth:`table`, and :meth:`to_pandas` gives a DataFrame.
+
+    Examples
+    --------
+    >>> rows = SweepRows([{"solver": "legacy", "dt": 0.01, "error": 0.031415926,
+    ...                    "cpu_time": 0.123456, "steps": 20, "status": "ok"}])
+    >>> rows[0]["solver"], len(rows)
+    ('legacy', 1)
+    >>> print(rows)
+    solver    dt    error  cpu_time  steps  status
+    legacy  0.01  0.03142    0.1235     20  ok
+    """
+
+    def table(self, columns: Sequence[str] | None = None, digits: int = 4) -> str:
+        """The rows as a text table, floats to ``digits`` significant digits.
+
+        ``columns`` defaults to every column but the seconds per part of the step
+        (``detection_time`` ...: :meth:`to_pandas` has them).
+        """
+        from dda.data import format_rows
+
+        if columns is None:
+            parts = {f"{name}_time" for name in SECTIONS}
+            columns = [c for c in dict.fromkeys(k for r in self for k in r) if c not in parts]
+        return format_rows(self, columns, digits)
+
+    def to_pandas(self):
+        """The rows as a :class:`pandas.DataFrame` (needs ``pip install 'dda[data]'``; see
+        :func:`dda.data.rows_frame`)."""
+        from dda.data import rows_frame
+
+        return rows_frame(self)
+
+    def __str__(self) -> str:
+        return self.table() if self else "SweepRows([])"
+
+    def __repr__(self) -> str:
+        return self.__str__()
+
+
 def sweep(cases: Sequence[Case], executor: Executor | None = None,
-          progress: bool | None = None) -> list[dict]:
+          progress: bool | None = None) -> SweepRows:
     """Run every case on ``executor`` and return their rows in the order of ``cases``.
 
     Parameters
@@ -178,7 +222,8 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
 
     Returns
     -------
-    list of dict
+    SweepRows
+        A list of dicts (it prints as a rounded table; ``rows.to_pandas()`` is a DataFrame).
         Per case: ``study``, the settings, ``error`` (relative, NaN for a failed run),
         ``cpu_time`` and ``wall_time`` (s, of the run alone), ``steps``, ``iterations``,
         ``open_close_passes``, ``solves``, ``dt_cuts``, ``contacts_max``, ``status`` ("ok" or
@@ -207,7 +252,7 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
         bar.close()
         if own:
             executor.shutdown(cancel_futures=True)
-    return rows
+    return SweepRows(rows)
 
 
 def _label(row) -> str:
@@ -247,10 +292,11 @@ def markdown_table(rows: Sequence[dict], columns: Sequence[str],
     return "\n".join(lines) + "\n"
 
 
-def pareto_front(rows: Sequence[dict], cost: str = "cpu_time", error: str = "error") -> list:
+def pareto_front(rows: Sequence[dict], cost: str = "cpu_time",
+                 error: str = "error") -> SweepRows:
     """The rows no other row beats in both cost and error, cheapest first.
 
-    Rows with a NaN error (failed runs) are left out.
+    Rows with a NaN error (failed runs) are left out. A :class:`SweepRows` (a list).
 
     >>> rows = [{"cpu_time": 1, "error": 0.1}, {"cpu_time": 2, "error": 0.2},
     ...         {"cpu_time": 3, "error": 0.01}]
@@ -264,7 +310,7 @@ def pareto_front(rows: Sequence[dict], cost: str = "cpu_time", error: str = "err
         if abs(r[error]) < best:
             front.append(r)
             best = abs(r[error])
-    return front
+    return SweepRows(front)
 
 
 def cheapest(rows: Sequence[dict], tolerance: float, cost: str = "cpu_time",
