@@ -1,7 +1,11 @@
-"""What a run needs from its process: SIGTERM as Ctrl-C, and one BLAS thread.
+"""What a run needs from its process: Ctrl-C and SIGTERM acted on between steps, and one BLAS
+thread.
 
-- SIGTERM raises ``KeyboardInterrupt`` during a run, so a killed job (a cluster's time limit)
-  writes its checkpoint and its last frames.
+- Ctrl-C (SIGINT) and SIGTERM during a run are noted and raise ``KeyboardInterrupt`` at the
+  end of the step under way, so a killed job (a cluster's time limit) writes its checkpoint
+  and its last frames. Raised where the signal lands, the interrupt could come inside a
+  compiled kernel's call back into Python (numba unpickling a constant), which turns it into
+  a ``SystemError`` and a traceback. A second signal before the step ends stops at once.
 - BLAS runs on ``BLAS_THREADS`` (1) threads: a step's dense work is small, and more threads
   only wait for each other, or for other processes (a sweep's workers). Legacy steps of the
   stacks of ``benchmarks/stacks.py`` on two cores, one thread against two: 2 x 2, 1.9 against
@@ -15,16 +19,19 @@ import signal
 import threading
 from contextlib import contextmanager
 
-__all__ = ["BLAS_THREADS", "blas_threads", "run_environment", "sigterm_as_interrupt"]
+__all__ = ["BLAS_THREADS", "Interrupts", "blas_threads", "deferred_interrupts", "run_environment",
+           "sigterm_as_interrupt"]
 
 BLAS_THREADS = 1
 
 
 @contextmanager
 def run_environment():
-    """SIGTERM as Ctrl-C and ``BLAS_THREADS`` BLAS threads within the block."""
-    with sigterm_as_interrupt(), _blas().limit(limits=BLAS_THREADS, user_api="blas"):
-        yield
+    """Ctrl-C and SIGTERM deferred to the end of a step (:func:`deferred_interrupts`; the
+    block gets its :class:`Interrupts`) and ``BLAS_THREADS`` BLAS threads within the block."""
+    with deferred_interrupts() as interrupts, _blas().limit(limits=BLAS_THREADS,
+                                                            user_api="blas"):
+        yield interrupts
 
 
 def blas_threads():
@@ -64,3 +71,40 @@ def sigterm_as_interrupt():
         yield
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+class Interrupts:
+    """The signal noted during a run (None: none yet); :meth:`check` raises it."""
+
+    def __init__(self):
+        self.signal = None
+
+    def check(self) -> None:
+        """Raise ``KeyboardInterrupt`` if a signal came (call it between steps)."""
+        if self.signal is not None:
+            raise KeyboardInterrupt(f"signal {self.signal}")
+
+
+@contextmanager
+def deferred_interrupts():
+    """Within the block, Ctrl-C and SIGTERM only note themselves in the :class:`Interrupts`
+    the block gets (the run checks it after each step); a second one raises
+    ``KeyboardInterrupt`` at once. Main thread only: elsewhere signals cannot be handled and
+    nothing changes. The old handlers are restored after."""
+    interrupts = Interrupts()
+    if threading.current_thread() is not threading.main_thread():
+        yield interrupts
+        return
+
+    def note(signum, frame):
+        if interrupts.signal is not None:
+            raise KeyboardInterrupt(f"signal {signum}")
+        interrupts.signal = signum
+
+    previous = {s: signal.signal(s, note) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield interrupts
+    finally:
+        for s, handler in previous.items():
+            if handler is not None:  # (None: a handler not set from Python; left as is)
+                signal.signal(s, handler)

@@ -256,11 +256,13 @@ class Simulation:
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)
         watchers = [w for w in (bar, callback) if w is not None]
-        # SIGTERM is Ctrl-C until the writer is closed (a second one during the checkpoint
-        # save must not kill the process before the files are complete); one BLAS thread
-        with run_environment():
+        # Ctrl-C and SIGTERM stop the run at the end of a step until the writer is closed (a
+        # second one during the checkpoint save must not kill the process before the files
+        # are complete); one BLAS thread
+        with run_environment() as interrupts:
             try:
-                self._steps(result, t_end, recorder, writer, checkpoint, watchers)
+                self._steps(result, t_end, recorder, writer, checkpoint, watchers,
+                            interrupts)
             except SimulationError as exc:
                 exc.result = result
                 raise
@@ -295,8 +297,9 @@ class Simulation:
             progress = steps > 2000 and sys.stderr.isatty()
         return ProgressBar(t_end, self.committed.time, stats) if progress else None
 
-    def _steps(self, result, t_end, recorder, writer, checkpoint, watchers):
-        """Step to ``t_end``: commit, record, checkpoint and tell the watchers each step."""
+    def _steps(self, result, t_end, recorder, writer, checkpoint, watchers, interrupts):
+        """Step to ``t_end``: commit, record, checkpoint and tell the watchers each step; stop
+        after a step when ``interrupts`` (:class:`dda.runtime.Interrupts`) got a signal."""
         settings = self.settings
         while self.committed.time < t_end - 1e-12 * max(1.0, t_end):
             report = self._advance(result, t_end, settings)
@@ -307,6 +310,7 @@ class Simulation:
                 self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
             for watch in watchers:
                 watch(self.committed, report)
+            interrupts.check()
 
     def _prepare(self, duration, output, checkpoint, every):
         """The run's end time, writer and ``(checkpoint path, every)`` (or None), checked."""
