@@ -205,3 +205,16 @@ def test_block_names_ids_and_the_shaken_block_round_trip(run_with_output):
     corners = grid.get_cell(top).points[:, :2]
     moved = np.array(box(0.4, 0.2, 0.2, 0.2)) + grid.cell_data["displacement [m]"][top, :2]
     np.testing.assert_allclose(corners.mean(axis=0), moved.mean(axis=0), atol=1e-6)
+
+
+def test_pyvista_draws_the_force_vectors_as_arrows(run_with_output):
+    pv = pytest.importorskip("pyvista")
+    _, writer, _ = run_with_output
+    grid = pv.read(str(writer.files[-1]))
+    contacts = grid.extract_cells(np.flatnonzero(grid.cell_data["kind"] == 1))
+    arrows = contacts.glyph(orient="normal_force_vector [N/m]", scale=False, factor=0.05)
+    assert arrows.n_points > 0
+    # the blocks rest on the base: the forces on them (the vertices' blocks) point up
+    low, high = contacts.bounds[2], arrows.bounds[3]
+    assert high == pytest.approx(contacts.bounds[3] + 0.05, rel=1e-3)
+    assert arrows.bounds[2] >= low - 1e-3
