@@ -4,7 +4,7 @@ scene.
     dda run SCENE.toml|SCRIPT.py|RUN.ckpt [--out DIR] [--duration S] [--no-progress]
     dda demo [--out DIR]
     dda render OUT/case.pvd [--png FILE] [--gif FILE] [--mp4 FILE] [--field NAME] [--frame N]
-                            [--relative-to ID]
+                            [--relative-to BLOCK|auto|none]
     dda info SCENE.toml
 """
 
@@ -220,10 +220,13 @@ def main(argv=None) -> int:
     p.add_argument("--png", help="PNG of one frame (default: next to the PVD)")
     p.add_argument("--gif", help="animation, GIF")
     p.add_argument("--mp4", help="animation, MP4 (H.264; needs dda[vis])")
-    p.add_argument("--field", default="displacement", help="cell field to colour by")
-    p.add_argument("--relative-to", type=int, metavar="ID", help="colour displacement, "
-                   "velocity or rotation relative to the block with this block_id (a "
-                   "shaking table's, say)")
+    p.add_argument("--field", default="displacement", help="cell field to colour by: "
+                   "displacement, velocity, rotation, stress, ... (its unit may be left out)")
+    p.add_argument("--relative-to", default="auto", metavar="BLOCK", help="colour "
+                   "displacement, velocity or rotation relative to this block's: its name or "
+                   "its block_id (a block's name if a block has it, else an integer is a "
+                   "block_id); 'auto' (the default): the shaken block when the files mark "
+                   "one; 'none': as they are")
     p.add_argument("--frame", type=int, default=-1, help="frame of the PNG (default last)")
     p.add_argument("--fps", type=float, default=10.0)
     p.set_defaults(func=cmd_render)

@@ -93,6 +93,7 @@ def history(result, blocks=None, path=None, title=None, relative_to="auto"):
         axes[2].step(st.time, st.contacts - st.closed, where="post", label="open (tracked)")
         axes[2].legend(fontsize="small")
     axes[2].set_ylabel("contacts")
+    axes[2].yaxis.get_major_locator().set_params(integer=True)  # counts: whole ticks
     axes[2].set_xlabel("time (s)")
     if title:
         fig.suptitle(title)
@@ -105,7 +106,11 @@ def history(result, blocks=None, path=None, title=None, relative_to="auto"):
 
 
 def read_pvd(path) -> list[tuple[float, Path]]:
-    """The (time, VTU file) entries of a PVD collection, in time order."""
+    """The (time, VTU file) entries of a PVD collection, in time order.
+
+    (pyvista's ``PVDReader`` reads the same XML the same way, in Python; this one needs no
+    pyvista, so the series of a run can be listed, checked and resumed without it.)
+    """
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"no PVD file {path}")
@@ -130,78 +135,324 @@ def _pyvista():
 
 
 _RELATIVE_FIELDS = ("displacement", "velocity", "rotation")
+_NOT_SHOWN = ("kind", "vtkOriginalCellIds", "block_id", "shaken", "vertex_block", "edge_block")
+#: the units a colour bar may show a quantity in, for each unit of the files
+_DISPLAY_UNITS = {"m": (("mm", 1e-3), ("m", 1.0)), "m/s": (("mm/s", 1e-3), ("m/s", 1.0)),
+                  "rad": (("mrad", 1e-3), ("rad", 1.0)),
+                  "Pa": (("Pa", 1.0), ("kPa", 1e3), ("MPa", 1e6), ("GPa", 1e9)),
+                  "N/m": (("N/m", 1.0), ("kN/m", 1e3), ("MN/m", 1e6))}
+
+
+def _split_unit(name: str) -> tuple[str, str | None]:
+    """``"displacement [m]"`` -> ``("displacement", "m")``; a name without a unit -> (name,
+    None)."""
+    if name.endswith("]") and " [" in name:
+        base, unit = name[:-1].rsplit(" [", 1)
+        return base, unit
+    return name, None
+
+
+def _field_key(names, field: str, file) -> str:
+    """The cell array that ``field`` names: itself, or the one that carries its unit
+    (``"displacement"`` -> ``"displacement [m]"``, written by the files since they carry
+    units; files of before have the plain name only)."""
+    names = list(names)
+    with_unit = [k for k in names if _split_unit(k)[0] == field and _split_unit(k)[1]]
+    if field in names and (_split_unit(field)[1] or not with_unit):
+        return field
+    if with_unit:
+        return with_unit[0]
+    shown = sorted({_split_unit(k)[0] for k in names if k not in _NOT_SHOWN})
+    raise ValueError(f"{file} has no block field {field!r} (there are: {', '.join(shown)})")
+
+
+def _display_unit(unit: str | None, top: float) -> tuple[str | None, float]:
+    """The unit to show values up to ``top`` (in ``unit``) in, and its size in ``unit``: the
+    largest whose size ``top`` reaches (mm under a metre, MPa from 1e6 Pa, ...)."""
+    choices = _DISPLAY_UNITS.get(unit)
+    if not choices:
+        return unit, 1.0
+    fit = [c for c in choices if top >= c[1]]
+    return fit[-1] if fit else choices[0]
+
+
+def _blocks_of(pv, file):
+    """The block cells of a VTU file and the block names the file carries (by block_id)."""
+    from dda.io.vtu import block_names
+
+    mesh = pv.read(str(file))
+    names = block_names(mesh.field_data)
+    if "kind" in mesh.cell_data:
+        mesh = mesh.extract_cells(np.flatnonzero(np.asarray(mesh.cell_data["kind"]) == 0))
+    return mesh, names
+
+
+def _listing(ids, names) -> str:
+    """``base (0), top (1), ...`` (the first 20 blocks)."""
+    ids = sorted(int(i) for i in ids)
+    label = [f"{names[i]} ({i})" if i < len(names) else str(i) for i in ids[:20]]
+    more = f", ... ({len(ids) - 20} more)" if len(ids) > 20 else ""
+    return ", ".join(label) + more
+
+
+def _file_reference(mesh, names, relative_to, file="the file") -> int | None:
+    """The ``block_id`` that ``relative_to`` names in a file's block cells, or None.
+
+    Parameters
+    ----------
+    mesh : pyvista mesh of the block cells (cell data ``block_id``, optionally ``shaken``)
+    names : list of str
+        The file's block names by block_id (:func:`dda.io.vtu.block_names`; may be empty).
+    relative_to : None, int, or str
+        None: no reference block. An int: a block_id. A string: the block of that name when
+        a block has it; else ``"auto"`` (the shaken block when the file marks one, else
+        none), ``"none"`` (no reference block), or an integer (a block_id, so a block
+        named ``"3"`` is found by its name and ``"3"`` is block_id 3 only when no block
+        has that name).
+    file : str or Path
+        The file's name, for the messages.
+
+    Raises
+    ------
+    ValueError
+        For a name or block_id the file does not have; the message lists its blocks.
+    """
+    if relative_to is None:
+        return None
+    ids = np.asarray(mesh.cell_data["block_id"]).astype(np.int64)
+    if isinstance(relative_to, str):
+        key = relative_to.strip()
+        if key in names:
+            return names.index(key)
+        if key.lower() == "none":
+            return None
+        if key.lower() == "auto":
+            shaken = np.asarray(mesh.cell_data["shaken"]) if "shaken" in mesh.cell_data else ()
+            marked = ids[np.asarray(shaken) == 1] if len(shaken) else ids[:0]
+            return int(marked.min()) if len(marked) else None
+        try:
+            relative_to = int(key)
+        except ValueError:
+            where = (f"the blocks are: {_listing(ids, names)}" if names else
+                     "it carries no block names: give a block_id, one of "
+                     f"{_listing(ids, names)}")
+            raise ValueError(f"no block named {key!r} in {file}; {where}") from None
+    if isinstance(relative_to, (bool, np.bool_)) or not isinstance(
+            relative_to, (int, np.integer)):
+        raise ValueError(f"relative_to: a block name, a block_id, 'auto' or None, not "
+                         f"{relative_to!r}")
+    if not np.any(ids == relative_to):
+        raise ValueError(f"{file} has no block with block_id {relative_to} (the blocks are: "
+                         f"{_listing(ids, names)})")
+    return int(relative_to)
+
+
+def _colour_mesh(pv, file, field, relative_to=None):
+    """The block cells of ``file`` with cell data ``shown``, the magnitude of ``field`` (in
+    the file's unit) relative to the block ``relative_to`` names (:func:`_file_reference`),
+    and what was shown: ``{"field": the array's name, "vector": whether it has components,
+    "reference": block_id or None, "reference_name": its name or None}``."""
+    mesh, names = _blocks_of(pv, file)
+    key = _field_key(mesh.cell_data.keys(), field, file)
+    base = _split_unit(key)[0]
+    if base not in _RELATIVE_FIELDS and relative_to is not None and not (
+            isinstance(relative_to, str) and relative_to.strip().lower() in ("auto", "none")):
+        raise ValueError(f"relative_to goes with {', '.join(_RELATIVE_FIELDS)}, not "
+                         f"{field!r}")
+    ref = _file_reference(mesh, names, relative_to, file) if base in _RELATIVE_FIELDS else None
+    values = np.asarray(mesh.cell_data[key], dtype=float)
+    vector = values.ndim == 2
+    if ref is not None:
+        ids = np.asarray(mesh.cell_data["block_id"])
+        values = values - values[np.flatnonzero(ids == ref)[0]]
+    mesh.cell_data["shown"] = np.linalg.norm(values, axis=1) if vector else values
+    name = names[ref] if ref is not None and ref < len(names) else None
+    return mesh, {"field": key, "vector": vector, "reference": ref, "reference_name": name}
 
 
 def _blocks_mesh(pv, file, field, relative_to=None):
-    mesh = pv.read(str(file))
-    if "kind" in mesh.cell_data:
-        mesh = mesh.extract_cells(np.flatnonzero(np.asarray(mesh.cell_data["kind"]) == 0))
-    if field not in mesh.cell_data:
-        names = sorted(k for k in mesh.cell_data if k not in ("kind", "vtkOriginalCellIds"))
-        raise ValueError(f"{file} has no block field {field!r} (there are: {', '.join(names)})")
-    values = np.asarray(mesh.cell_data[field], dtype=float)
-    if relative_to is not None:
-        if field not in _RELATIVE_FIELDS:
-            raise ValueError(f"relative_to goes with {', '.join(_RELATIVE_FIELDS)}, not "
-                             f"{field!r}")
-        ids = np.asarray(mesh.cell_data["block_id"])
-        hit = np.flatnonzero(ids == relative_to)
-        if len(hit) == 0:
-            raise ValueError(f"{file} has no block with block_id {relative_to}")
-        values = values - values[hit[0]]
-    if values.ndim == 2:
-        values = np.linalg.norm(values, axis=1)
-    mesh.cell_data["shown"] = values
-    return mesh
+    """The block cells of ``file`` with cell data ``shown`` (:func:`_colour_mesh`)."""
+    return _colour_mesh(pv, file, field, relative_to)[0]
+
+
+def _nice_length(span: float) -> float:
+    """The largest 1, 2 or 5 times a power of ten that is at most ``span`` (a scale bar's
+    length).
+
+    Examples
+    --------
+    >>> _nice_length(0.37), _nice_length(3.0), _nice_length(0.0012)
+    (0.2, 2.0, 0.001)
+    """
+    power = 10.0 ** np.floor(np.log10(span))
+    return float(max(k * power for k in (1, 2, 5) if k * power <= span * (1 + 1e-12)))
+
+
+def _length_label(length: float) -> str:
+    return f"{length * 1e3:g} mm" if length < 0.1 else f"{length:g} m"
 
 
 class _Frames:
-    """A plotter with a fixed 2D camera and colour range over a series of frames."""
+    """Pictures of a series' frames that a report can use: the blocks (pyvista, off screen)
+    coloured by one field on a fixed colour range, on axes in metres with a scale bar, a
+    colour bar that names the quantity and its unit, and the time (matplotlib lays them out).
 
-    def __init__(self, files, field, size, relative_to=None):
+    The camera and colour range are the series' first and last frames'.
+    """
+
+    DPI = 100
+    #: margins around the picture of the blocks, pixels: left, bottom, right, top
+    MARGINS = (78, 52, 128, 34)
+
+    def __init__(self, files, field, size, relative_to="auto"):
         self.pv = _pyvista()
         self.field = field
         self.relative_to = relative_to
-        meshes = [_blocks_mesh(self.pv, f, field, relative_to) for f in (files[0], files[-1])]
+        meshes, info = zip(*(_colour_mesh(self.pv, f, field, relative_to)
+                             for f in (files[0], files[-1])), strict=True)
+        info = info[-1]
         lo = np.min([m.bounds[::2] for m in meshes], axis=0)
         hi = np.max([m.bounds[1::2] for m in meshes], axis=0)
-        self.bounds = (lo, hi)
         top = max(float(np.nanmax(m.cell_data["shown"])) for m in meshes)
-        self.clim = (0.0, top if top > 0 else 1.0)
-        self.size = size
-        self.title = f"|{field}|" + ("" if relative_to is None else
-                                      f" relative to block {relative_to}")
+        base, unit = _split_unit(info["field"])
+        self.unit, self.scale = _display_unit(unit, top)
+        self.clim = (0.0, top / self.scale if top > 0 else 1.0)
+        self.size = tuple(int(s) for s in size)
+        quantity = f"|{base}|" if info["vector"] else base
+        if info["reference"] is not None:
+            name = info["reference_name"] or f"block {info['reference']}"
+            quantity += f" relative to {name}"
+        self.title = quantity + (f" [{self.unit}]" if self.unit else "")
+        self._view(lo, hi)
+        self._figure = None
 
-    def image(self, file, time):
+    def _view(self, lo, hi):
+        """The world window the blocks are drawn in: the frames' bounds with a margin, on
+        the aspect of the picture's pixels."""
+        left, bottom, right, top = self.MARGINS
+        w, h = self.size
+        self.pixels = (max(w - left - right, 16), max(h - bottom - top, 16))
+        pw, ph = self.pixels
+        span = np.maximum(hi[:2] - lo[:2], 1e-9) * 1.08
+        width = max(span[0], span[1] * pw / ph)
+        height = width * ph / pw
+        centre = 0.5 * (lo[:2] + hi[:2])
+        self.extent = (centre[0] - width / 2, centre[0] + width / 2,
+                       centre[1] - height / 2, centre[1] + height / 2)
+
+    def mesh(self, file):
+        """The block cells of one file, ``shown`` in the colour bar's unit."""
+        mesh = _blocks_mesh(self.pv, file, self.field, self.relative_to)
+        mesh.cell_data["shown"] = mesh.cell_data["shown"] / self.scale
+        return mesh
+
+    def scene(self, file) -> np.ndarray:
+        """The blocks alone, (height, width, 3) pixels covering :attr:`extent`."""
         pv = self.pv
-        mesh = _blocks_mesh(pv, file, self.field, self.relative_to)
-        p = pv.Plotter(off_screen=True, window_size=self.size)
+        mesh = self.mesh(file)
+        p = pv.Plotter(off_screen=True, window_size=self.pixels)
         p.set_background("white")
-        p.add_mesh(mesh, scalars="shown", clim=self.clim, cmap="viridis",
-                   scalar_bar_args={"title": self.title, "color": "black"})
+        p.add_mesh(mesh, scalars="shown", clim=self.clim, cmap="viridis", show_scalar_bar=False)
         # the polygons' own edges (show_edges would draw the triangles they render as)
         p.add_mesh(mesh.extract_all_edges(), color="black", line_width=1)
-        p.add_text(f"t = {time:.4g} s", color="black", font_size=10)
-        lo, hi = self.bounds
-        centre = 0.5 * (lo + hi)
-        p.camera_position = [(centre[0], centre[1], 1.0), (centre[0], centre[1], 0.0),
-                             (0.0, 1.0, 0.0)]
+        x0, x1, y0, y1 = self.extent
+        cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+        p.camera_position = [(cx, cy, 1.0), (cx, cy, 0.0), (0.0, 1.0, 0.0)]
         p.enable_parallel_projection()
-        p.camera.parallel_scale = 0.55 * max(hi[1] - lo[1], (hi[0] - lo[0]) * self.size[1]
-                                             / self.size[0])
+        p.camera.parallel_scale = 0.5 * (y1 - y0)
         img = p.screenshot(return_img=True)
         p.close()
-        return img
+        return np.asarray(img)[..., :3]
+
+    def image(self, file, time) -> np.ndarray:
+        """One picture, (height, width, 3) pixels of ``size``."""
+        scene = self.scene(file)
+        if self._figure is None:
+            self._figure = self._layout(scene)
+        fig, picture, clock = self._figure
+        picture.set_data(scene)
+        clock.set_text(f"t = {time:.4g} s")
+        fig.canvas.draw()
+        return np.asarray(fig.canvas.buffer_rgba())[..., :3].copy()
+
+    def _layout(self, scene):
+        """The figure around the first picture of the blocks: axes, colour bar, scale bar
+        (in the corner the blocks leave most free) and time."""
+        from matplotlib import colors
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.cm import ScalarMappable
+        from matplotlib.figure import Figure
+        from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+        w, h = self.size
+        left, bottom, right, top = self.MARGINS
+        fig = Figure(figsize=(w / self.DPI, h / self.DPI), dpi=self.DPI)
+        FigureCanvasAgg(fig)
+        pw, ph = self.pixels
+        ax = fig.add_axes((left / w, bottom / h, pw / w, ph / h))
+        picture = ax.imshow(scene, extent=self.extent, origin="upper", aspect="auto",
+                            interpolation="nearest")
+        ax.set_xlabel("x (m)")
+        ax.set_ylabel("y (m)")
+        ax.tick_params(labelsize=9)
+        cax = fig.add_axes(((left + pw + 16) / w, bottom / h, 16 / w, ph / h))
+        bar = fig.colorbar(ScalarMappable(colors.Normalize(*self.clim), "viridis"), cax=cax)
+        bar.set_label(self.title, fontsize=10)
+        bar.ax.tick_params(labelsize=9)
+        x0, x1, y0, y1 = self.extent
+        length = _nice_length(0.2 * (x1 - x0))
+        ax.add_artist(AnchoredSizeBar(
+            ax.transData, length, _length_label(length), loc=_free_corner(scene), pad=0.5,
+            sep=4, borderpad=0.6, frameon=True, size_vertical=0.008 * (y1 - y0),
+            color="black", fontproperties={"size": 10}))
+        clock = ax.set_title("", fontsize=11, loc="left")
+        return fig, picture, clock
+
+
+def _free_corner(scene: np.ndarray) -> str:
+    """The corner of a picture (matplotlib's location name) whose quarter holds the fewest
+    non-white pixels."""
+    h, w = scene.shape[:2]
+    filled = (scene < 245).any(axis=2)
+    quarters = {"upper left": filled[: h // 4, : w // 3], "upper right": filled[: h // 4,
+                                                                                 -w // 3:],
+                "lower left": filled[-h // 4:, : w // 3],
+                "lower right": filled[-h // 4:, -w // 3:]}
+    return min(quarters, key=lambda k: quarters[k].mean())
 
 
 def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
-                 size=(1024, 768), relative_to: int | None = None) -> Path:
-    """Render one frame of a PVD series (default the last) to a PNG file, blocks coloured by
-    the magnitude of a cell field (``displacement``, ``velocity``, ``stress``, ...).
+                 size=(1024, 768), relative_to="auto") -> Path:
+    """Render one frame of a PVD series (default the last) to a PNG file of ``size`` pixels.
 
-    ``relative_to`` (a block index, the ``block_id`` of the VTU cells) colours
-    displacement, velocity or rotation relative to that block's: on a shaking table, how
-    far each block has moved on the table.
+    The blocks are coloured by the magnitude of a cell field, on axes in metres, with a
+    scale bar, a colour bar that names the quantity and its unit, and the time.
+
+    Parameters
+    ----------
+    pvd : str or Path
+        The series' .pvd file.
+    png : str or Path
+        The picture to write.
+    frame : int
+        Which frame (an index into the series; default the last).
+    field : str
+        ``"displacement"``, ``"velocity"``, ``"rotation"``, ``"stress"``, ...: a cell field
+        of the blocks, by its name with or without its unit (``"displacement [m]"``).
+    size : (int, int)
+        Width and height of the picture, pixels.
+    relative_to : "auto", str, int or None
+        Colour displacement, velocity or rotation relative to this block's (on a shaking
+        table, how far each block has moved on the table): a block's name or its
+        ``block_id`` (the block's index). The default, ``"auto"``, takes the shaken block
+        when the files mark one (cell data ``shaken``); None (or ``"none"``) colours the
+        fields as they are. A string is a block's name when a block has it, else an
+        integer string is a block_id (see :func:`_file_reference`).
+
+    Returns
+    -------
+    Path
+        The PNG written.
     """
     from PIL import Image
 
@@ -215,12 +466,13 @@ def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
 
 
 def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800, 600),
-            max_frames: int | None = None, relative_to: int | None = None) -> Path:
+            max_frames: int | None = None, relative_to="auto") -> Path:
     """Animate a PVD series to a GIF (Pillow) or an MP4 (H.264 through imageio-ffmpeg).
 
     ``max_frames`` keeps that many frames evenly spread over the series. An MP4's frame
     size is rounded up to whole 16-pixel blocks, as the codec needs. ``field`` and
-    ``relative_to`` as in :func:`render_frame`.
+    ``relative_to`` as in :func:`render_frame`; each frame is drawn as it draws one, on the
+    camera and colour range of the series' first and last frames.
     """
     out = Path(out)
     kind = out.suffix.lower()

@@ -41,6 +41,8 @@ def frame(model, state) -> Frame:
         contact_blocks=np.stack([c.bj, c.bk], axis=1)[closed],
         normal_force=-c.t_n[closed], shear_force=c.t_s[closed],
         contact_state=c.state[closed].astype(np.int64),
+        block_names=tuple(b.name for b in model.scene.blocks),
+        shaken=np.array([s.block for s in model.shakes], dtype=np.int64),
     )
 
 

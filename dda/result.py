@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -14,7 +14,14 @@ __all__ = ["Result", "StepStats", "Frame", "CostProfile"]
 
 @dataclass
 class Frame:
-    """The state of every block and contact at one recorded step (what a writer writes)."""
+    """The state of every block and contact at one recorded step (what a writer writes).
+
+    ``contact_normal`` is the unit normal of each contact's edge, pointing out of the edge's
+    block (``contact_blocks[:, 1]``) towards the vertex's block (``contact_blocks[:, 0]``);
+    ``normal_force`` is compression positive, so the normal force on the vertex's block is
+    ``normal_force * contact_normal``. ``block_names`` names the blocks in index order and
+    ``shaken`` lists the indices of the shaken blocks.
+    """
 
     time: float
     vertices: np.ndarray
@@ -31,6 +38,8 @@ class Frame:
     normal_force: np.ndarray
     shear_force: np.ndarray
     contact_state: np.ndarray
+    block_names: tuple = ()
+    shaken: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
 
 class StepStats:

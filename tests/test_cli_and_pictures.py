@@ -196,3 +196,139 @@ def test_demo_and_the_console_entry_point(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert "wrote 3 VTU files" in proc.stdout
     assert (tmp_path / "demo.pvd").is_file()
+
+
+def test_frames_default_relative_to_the_shaken_base(series):
+    """The files mark the shaken block: by default the colours are the blocks' displacement
+    relative to it, and the colour bar says so, with the unit."""
+    from dda.plot import _blocks_mesh, _Frames, _pyvista
+
+    scene, pvd = series
+    last = plot.read_pvd(pvd)[-1][1]
+    pv = _pyvista()
+    raw = pv.read(str(last))
+    blocks = np.flatnonzero(raw.cell_data["kind"] == 0)
+    u = raw.cell_data["displacement [m]"][blocks]
+    ids = raw.cell_data["block_id"][blocks]
+    assert list(ids[raw.cell_data["shaken"][blocks] == 1]) == [0]  # the base
+    want = np.linalg.norm(u - u[ids == 0][0], axis=1)
+    assert want[ids == 1][0] > 1e-3  # the top block slid on the table
+    np.testing.assert_allclose(_blocks_mesh(pv, last, "displacement", "auto")
+                               .cell_data["shown"], want)
+    frames = _Frames([last, last], "displacement", (640, 480))  # the default: "auto"
+    assert frames.title == "|displacement| relative to base [mm]"
+    np.testing.assert_allclose(frames.mesh(last).cell_data["shown"], 1e3 * want)
+    absolute = _Frames([last, last], "displacement", (640, 480), relative_to="none")
+    assert absolute.title == "|displacement| [mm]"
+    np.testing.assert_allclose(absolute.mesh(last).cell_data["shown"],
+                               1e3 * np.linalg.norm(u, axis=1))
+    assert _Frames([last, last], "stress", (640, 480)).title == "|stress| [kPa]"
+    assert _Frames([last, last], "rotation [rad]", (640, 480)).title.startswith(
+        "rotation relative to base [")
+
+
+def test_the_cli_renders_relative_to_the_shaken_base_by_default(series, tmp_path, monkeypatch):
+    seen = []
+    monkeypatch.setattr(plot, "render_frame", lambda *a, **k: seen.append(k) or a[1])
+    scene, pvd = series
+    assert main(["render", str(pvd), "--png", str(tmp_path / "a.png")]) == 0
+    assert main(["render", str(pvd), "--png", str(tmp_path / "a.png"), "--relative-to",
+                 "top"]) == 0
+    assert [k["relative_to"] for k in seen] == ["auto", "top"]
+
+
+def test_the_png_has_axes_in_metres(series, tmp_path):
+    """The PNG has the size asked for, and the picture of the blocks spans on its axes the
+    metres the blocks span."""
+    from PIL import Image
+
+    from dda.plot import _Frames, _nice_length, _pyvista
+
+    scene, pvd = series
+    png = plot.render_frame(pvd, tmp_path / "f.png", size=(640, 480), frame=2)
+    with Image.open(png) as im:
+        assert im.size == (640, 480)
+    assert not_blank(png_pixels(png))
+    last = plot.read_pvd(pvd)[2][1]
+    frames = _Frames([last, last], "displacement", (640, 480))
+    picture = frames.scene(last)
+    assert picture.shape[:2] == frames.pixels[::-1]
+    x0, x1, y0, y1 = frames.extent
+    filled = (picture < 200).any(axis=2)
+    cols, rows = np.flatnonzero(filled.any(axis=0)), np.flatnonzero(filled.any(axis=1))
+    px = (x1 - x0) / picture.shape[1]
+    bounds = _pyvista().read(str(last)).bounds
+    np.testing.assert_allclose([x0 + cols[0] * px, x0 + (cols[-1] + 1) * px],
+                               [bounds[0], bounds[1]], atol=2 * px)
+    np.testing.assert_allclose([y1 - (rows[-1] + 1) * px, y1 - rows[0] * px],
+                               [bounds[2], bounds[3]], atol=2 * px)
+    assert [_nice_length(s) for s in (0.37, 1.0, 7.0, 0.02)] == [0.2, 1.0, 5.0, 0.02]
+
+
+@pytest.fixture(scope="module")
+def named_files(tmp_path_factory):
+    """A file whose blocks are named "7" (block_id 0), "table" (1, shaken) and "top" (2),
+    with the fields under their unit-bearing names only."""
+    from dda.contact import CoulombSingle, JointMaterial
+    from dda.io.vtu import VTUWriter
+    from dda.materials import LinearElastic
+
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    s = dda.Scene(gravity=9.81)
+    s.add_block([(0, -1), (1, -1), (1, -0.5), (0, -0.5)], rock, fixed=True, name="7")
+    table = s.add_block([(0, 0), (3, 0), (3, 0.5), (0, 0.5)], rock, fixed=True, name="table")
+    s.add_block([(1, 0.5), (1.5, 0.5), (1.5, 1.0), (1, 1.0)], rock, name="top")
+    s.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                              friction=CoulombSingle(phi=20)))
+    s.shake(table, acceleration=lambda t: (6.0 * np.sin(10 * np.pi * t), 0.0))
+    writer = VTUWriter(tmp_path_factory.mktemp("named") / "case", plain_names=False)
+    dda.Simulation(s, dt=2e-3).run(duration=0.02, output=writer)
+    return writer.pvd_path, writer.files[-1]
+
+
+def test_blocks_by_name_or_id(named_files):
+    from dda.plot import _blocks_of, _file_reference, _pyvista
+
+    pvd, last = named_files
+    mesh, names = _blocks_of(_pyvista(), last)
+    assert names == ["7", "table", "top"]
+    for key, want in (("top", 2), ("table", 1), ("2", 2), (2, 2), (np.int64(1), 1),
+                      ("7", 0),  # a block's name first: the block named "7"
+                      (" top ", 2), ("auto", 1), ("none", None), ("None", None), (None, None)):
+        assert _file_reference(mesh, names, key) == want, key
+    with pytest.raises(ValueError, match=r"no block named 'tabel' in .*; the blocks are: "
+                                         r"7 \(0\), table \(1\), top \(2\)"):
+        _file_reference(mesh, names, "tabel")
+    with pytest.raises(ValueError, match="no block with block_id 7 .*top \\(2\\)"):
+        _file_reference(mesh, names, 7)
+
+
+def test_the_cli_takes_block_names(named_files, tmp_path, capsys):
+    pvd, last = named_files
+    png = tmp_path / "top.png"
+    assert main(["render", str(pvd), "--png", str(png), "--relative-to", "top"]) == 0
+    assert png.is_file()
+    assert main(["render", str(pvd), "--png", str(png), "--relative-to", "tabel"]) == 2
+    err = capsys.readouterr().err
+    assert "no block named 'tabel'" in err and "table (1)" in err
+    assert main(["render", str(pvd), "--png", str(png), "--relative-to", "top",
+                 "--field", "stress"]) == 2
+    assert "relative_to goes with displacement" in capsys.readouterr().err
+
+
+def test_fields_by_their_short_names():
+    from dda.plot import _display_unit, _field_key
+
+    both = ["kind", "displacement [m]", "displacement", "stress [Pa]"]
+    assert _field_key(both, "displacement", "f") == "displacement [m]"
+    assert _field_key(both, "displacement [m]", "f") == "displacement [m]"
+    assert _field_key(["displacement"], "displacement", "f") == "displacement"  # old files
+    assert _field_key(both, "stress", "f") == "stress [Pa]"
+    with pytest.raises(ValueError, match=r"no block field 'strain' \(there are: "
+                                         r"displacement, stress\)"):
+        _field_key(both, "strain", "f")
+    assert _display_unit("m", 4.5e-3) == ("mm", 1e-3)
+    assert _display_unit("m", 2.0) == ("m", 1.0)
+    assert _display_unit("Pa", 6.5e3) == ("kPa", 1e3)
+    assert _display_unit("N/m", 2e7) == ("MN/m", 1e6)
+    assert _display_unit(None, 3.0) == (None, 1.0)

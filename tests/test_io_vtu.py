@@ -8,6 +8,7 @@ import pytest
 
 import dda
 from dda.contact import CoulombSingle, JointMaterial
+from dda.io.vtu import block_names, field_name
 from tests.conftest import box
 
 
@@ -113,3 +114,107 @@ def test_compiled_pair_forces_are_the_numpy_ones():
     assert len(keys) > 20 and len(closed) > len(keys)
     for have, want in zip(got, (keys, f, n), strict=True):
         np.testing.assert_array_equal(have, want)
+
+
+def _cells(mesh, name):
+    return np.concatenate(mesh.cell_data[name])
+
+
+def test_field_names_carry_their_units(run_with_output):
+    _, writer, _ = run_with_output
+    mesh = meshio.read(writer.files[-1])
+    for name in ("displacement [m]", "velocity [m/s]", "rotation [rad]", "stress [Pa]",
+                 "normal_force [N/m]", "shear_force [N/m]", "normal_force_vector [N/m]",
+                 "shear_force_vector [N/m]"):
+        assert name in mesh.cell_data
+    assert {"displacement [m]", "velocity [m/s]"} <= set(mesh.point_data)
+    # the names of before stay, the same numbers
+    for plain in ("displacement", "velocity", "rotation", "stress", "normal_force",
+                  "shear_force"):
+        np.testing.assert_array_equal(_cells(mesh, plain), _cells(mesh, field_name(plain)))
+    np.testing.assert_array_equal(mesh.point_data["displacement"],
+                                  mesh.point_data["displacement [m]"])
+
+
+def test_plain_names_can_be_left_out(tmp_path, rock):
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True, name="base")
+    scene.add_block(box(0.4, 0.2, 0.2, 0.2), rock, name="top")
+    scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
+                                  friction=CoulombSingle(phi=30)))
+    writer = dda.io.VTUWriter(tmp_path / "case", plain_names=False)
+    dda.Simulation(scene, dt=1e-3).run(duration=2e-3, output=writer)
+    mesh = meshio.read(writer.files[-1])
+    assert "displacement [m]" in mesh.cell_data and "displacement" not in mesh.cell_data
+    assert set(mesh.point_data) == {"displacement [m]", "velocity [m/s]"}
+    assert block_names(mesh.field_data) == ["base", "top"]
+
+
+def test_contact_force_vectors(run_with_output):
+    """Each contact's vectors are its scalar forces along the edge's normal and tangent, as
+    forces on the vertex's block: summed over a pair's contacts they give the Result's joint
+    force."""
+    result, writer, (base, top, tri) = run_with_output
+    for i in (5, len(writer.files) - 1):
+        mesh = meshio.read(writer.files[i])
+        on = _cells(mesh, "kind") == 1
+        fn, fs = _cells(mesh, "normal_force")[on], _cells(mesh, "shear_force")[on]
+        vn = _cells(mesh, "normal_force_vector [N/m]")[on]
+        vs = _cells(mesh, "shear_force_vector [N/m]")[on]
+        assert len(fn) >= 4 and np.all(vn[:, 2] == 0) and np.all(vs[:, 2] == 0)
+        np.testing.assert_allclose(np.linalg.norm(vn, axis=1), np.abs(fn), rtol=1e-12)
+        np.testing.assert_allclose(np.linalg.norm(vs, axis=1), np.abs(fs), rtol=1e-12,
+                                   atol=1e-12 * np.abs(fn).max())
+        # the normal direction (unit, out of the edge's block) and the tangent are orthogonal
+        n = vn[:, :2] / fn[:, None]
+        np.testing.assert_allclose(np.linalg.norm(n, axis=1), 1.0, rtol=1e-12)
+        tau = np.stack([n[:, 1], -n[:, 0]], axis=1)
+        np.testing.assert_allclose(vs[:, :2], -fs[:, None] * tau, rtol=1e-12, atol=1e-9)
+        vertex = _cells(mesh, "vertex_block")[on]
+        edge = _cells(mesh, "edge_block")[on]
+        for b in (top, tri):
+            pair = ((vertex == b.index) & (edge == base.index)) | (
+                (vertex == base.index) & (edge == b.index))
+            sign = np.where(vertex[pair] == b.index, 1.0, -1.0)[:, None]
+            force = (sign * (vn + vs)[pair, :2]).sum(axis=0)  # on b, from the base
+            weighted = (sign * vn[pair, :2]).sum(axis=0)
+            nbar = weighted / np.linalg.norm(weighted)
+            want = result.joint_force(base, b)[i]
+            np.testing.assert_allclose([force @ nbar, force @ [nbar[1], -nbar[0]]], want,
+                                       rtol=1e-9, atol=1e-9 * abs(want[0]))
+            assert force[1] > 0  # the base holds the block up
+
+
+def test_block_names_ids_and_the_shaken_block_round_trip(run_with_output):
+    pv = pytest.importorskip("pyvista")
+    _, writer, blocks = run_with_output
+    path = writer.files[-1]
+    mesh = meshio.read(path)
+    grid = pv.read(str(path))
+    for names, ids, shaken, kind in (
+            (block_names(mesh.field_data), _cells(mesh, "block_id"), _cells(mesh, "shaken"),
+             _cells(mesh, "kind")),
+            (block_names(grid.field_data), grid.cell_data["block_id"],
+             grid.cell_data["shaken"], grid.cell_data["kind"])):
+        assert names == ["base", "top", "tri"]
+        assert np.issubdtype(np.asarray(ids).dtype, np.integer)
+        assert sorted(ids[kind == 0]) == [0, 1, 2] and np.all(ids[kind == 1] == -1)
+        assert list(ids[(kind == 0) & (shaken == 1)]) == [blocks[0].index]
+    # the cells of a block are that block's polygon
+    top = np.flatnonzero(grid.cell_data["block_id"] == blocks[1].index)[0]
+    corners = grid.get_cell(top).points[:, :2]
+    moved = np.array(box(0.4, 0.2, 0.2, 0.2)) + grid.cell_data["displacement [m]"][top, :2]
+    np.testing.assert_allclose(corners.mean(axis=0), moved.mean(axis=0), atol=1e-6)
+
+
+def test_pyvista_draws_the_force_vectors_as_arrows(run_with_output):
+    pv = pytest.importorskip("pyvista")
+    _, writer, _ = run_with_output
+    grid = pv.read(str(writer.files[-1]))
+    contacts = grid.extract_cells(np.flatnonzero(grid.cell_data["kind"] == 1))
+    arrows = contacts.glyph(orient="normal_force_vector [N/m]", scale=False, factor=0.05)
+    assert arrows.n_points > 0
+    # the blocks rest on the base: the forces on them (the vertices' blocks) point up
+    low, high = contacts.bounds[2], arrows.bounds[3]
+    assert high == pytest.approx(contacts.bounds[3] + 0.05, rel=1e-3)
+    assert arrows.bounds[2] >= low - 1e-3

@@ -1,13 +1,26 @@
 """A VTU/PVD series writer (meshio): one .vtu per recorded step and a .pvd that indexes them.
 
-Each .vtu holds
-- the blocks as polygon cells, with cell data ``block_id``, ``displacement`` (centroid, m),
-  ``velocity`` (centroid, m/s), ``rotation`` (rad) and ``stress`` ([sx, sy, txy], Pa), and point
-  data ``displacement`` and ``velocity`` at the vertices;
-- the closed contacts as vertex cells at the contact points, with cell data ``normal_force``
-  (compression positive, N/m), ``shear_force`` (N/m) and ``contact_state`` (1 stick, 2 slip).
-Block fields are NaN on contact cells and contact fields NaN on block cells; ``kind`` is 0 on
-blocks and 1 on contacts, so a Threshold filter in ParaView separates them.
+Field names carry their unit in brackets (``"displacement [m]"``; :data:`UNITS`). Each .vtu
+holds
+- the blocks as polygon cells, with cell data ``block_id`` (the block's index, int),
+  ``shaken`` (1 on a shaken block, else 0), ``displacement [m]`` (centroid),
+  ``velocity [m/s]`` (centroid), ``rotation [rad]`` and ``stress [Pa]`` ([sx, sy, txy]), and
+  point data ``displacement [m]`` and ``velocity [m/s]`` at the vertices;
+- the closed contacts as vertex cells at the contact points, with cell data
+  ``normal_force [N/m]`` (compression positive), ``shear_force [N/m]``,
+  ``normal_force_vector [N/m]`` and ``shear_force_vector [N/m]`` (3 components, the forces
+  on the vertex's block, for ParaView's Glyph filter or pyvista's ``glyph``),
+  ``contact_state`` (1 stick, 2 slip), ``vertex_block`` and ``edge_block`` (the indices of
+  the contact's two blocks);
+- the block names, in index order, as field data ``block_names``: their UTF-8 bytes, each
+  name ended by a zero byte (meshio reads and writes no text arrays; :func:`block_names`
+  turns the array back into names).
+Block fields are NaN on contact cells and contact fields NaN on block cells (the integer
+ones -1); ``kind`` is 0 on blocks and 1 on contacts, so a Threshold filter in ParaView
+separates them. The fields that were written before they carried units are written under
+their old names too (``displacement``, ``velocity``, ``rotation``, ``stress``,
+``normal_force``, ``shear_force``), for the scripts that read them, unless
+``VTUWriter(..., plain_names=False)``.
 Files are written to a temporary name and renamed, so a reader never sees half a file. The
 .pvd index gains each frame's entry as soon as its file is in place (its closing tags
 rewritten in one write; the whole index rewritten, atomically, when it does not end as this
@@ -17,7 +30,9 @@ but at most the last one.
 
 from __future__ import annotations
 
+import base64
 import os
+import zlib
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -26,7 +41,43 @@ import numpy as np
 
 from dda.result import Frame
 
-__all__ = ["VTUWriter"]
+__all__ = ["UNITS", "VTUWriter", "block_names", "field_name", "frame_to_mesh"]
+
+#: the unit of each field of the files, written in its name: ``"displacement [m]"``
+UNITS = {"displacement": "m", "velocity": "m/s", "rotation": "rad", "stress": "Pa",
+         "normal_force": "N/m", "shear_force": "N/m", "normal_force_vector": "N/m",
+         "shear_force_vector": "N/m"}
+
+#: the fields also written under their names of before they carried units
+PLAIN_NAMES = ("displacement", "velocity", "rotation", "stress", "normal_force", "shear_force")
+
+
+def field_name(name: str) -> str:
+    """The name a field has in the files: with its unit when it has one.
+
+    Examples
+    --------
+    >>> field_name("displacement"), field_name("kind")
+    ('displacement [m]', 'kind')
+    """
+    unit = UNITS.get(name)
+    return name if unit is None else f"{name} [{unit}]"
+
+
+def block_names(field_data) -> list[str]:
+    """The block names of a file's field data (meshio's ``mesh.field_data`` or pyvista's
+    ``mesh.field_data``), in block index order; empty when the file has none.
+
+    Examples
+    --------
+    >>> block_names({"block_names": np.frombuffer(b"base\\0top\\0", dtype=np.uint8)})
+    ['base', 'top']
+    """
+    if "block_names" not in field_data:
+        return []
+    raw = np.asarray(field_data["block_names"], dtype=np.uint8).tobytes()
+    return raw.decode("utf-8").split("\0")[:-1]
+
 
 
 def _pad3(a: np.ndarray) -> np.ndarray:
@@ -42,6 +93,9 @@ class VTUWriter:
         Path prefix of the files, for example ``"out/case"``; folders are created.
     every : int
         Write every this many recorded steps.
+    plain_names : bool
+        Also write the fields that carry a unit in their name (``"displacement [m]"``) under
+        their old plain names (``"displacement"``), for scripts written before.
 
     Examples
     --------
@@ -51,11 +105,15 @@ class VTUWriter:
     'case.pvd'
     """
 
-    def __init__(self, prefix, every: int = 1):
+    #: (a class default: the writers of checkpoints saved before it was an option)
+    plain_names = True
+
+    def __init__(self, prefix, every: int = 1, plain_names: bool = True):
         self.prefix = Path(prefix)
         if int(every) < 1:
             raise ValueError("VTUWriter: every must be at least 1")
         self.every = int(every)
+        self.plain_names = bool(plain_names)
         self.prefix.parent.mkdir(parents=True, exist_ok=True)
         self._entries: list[tuple[float, str]] = []
         self._n = 0  # entries that count: _entries[:_n]
@@ -85,7 +143,7 @@ class VTUWriter:
             name = f"{self.prefix.name}_{n:05d}.vtu"
             path = self.prefix.parent / name
             tmp = path.with_name(path.name + ".tmp.vtu")
-            meshio.write(tmp, frame_to_mesh(frame), file_format="vtu")
+            write_vtu(tmp, frame, plain_names=self.plain_names)
             os.replace(tmp, path)
             del self._entries[n:]  # an entry left by an interrupted write
             self._entries.append((frame.time, name))
@@ -140,46 +198,120 @@ def _dataset(t: float, name: str) -> str:
     return f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(name)}/>\n'
 
 
-def frame_to_mesh(frame: Frame) -> meshio.Mesh:
-    """The meshio mesh of one frame (block cells grouped by vertex count, then contacts)."""
-    offsets = frame.offsets
-    counts = np.diff(offsets)
-    n_vertices = len(frame.vertices)
-    n_contacts = len(frame.contact_point)
+def write_vtu(path, frame: Frame, plain_names: bool = True) -> None:
+    """Write one frame as a .vtu file: :func:`frame_to_mesh` by meshio, then the block names
+    as field data (which meshio's writer leaves out)."""
+    meshio.write(path, frame_to_mesh(frame, plain_names), file_format="vtu")
+    if frame.block_names:
+        names = b"".join(n.encode("utf-8") + b"\0" for n in frame.block_names)
+        _add_field_data(path, {"block_names": np.frombuffer(names, dtype=np.uint8)})
+
+
+def _add_field_data(path, arrays: dict) -> None:
+    """Put ``<FieldData>`` with these 1D byte arrays into a .vtu file meshio wrote (zlib
+    compressed, as meshio writes the rest)."""
+    path = Path(path)
+    text = path.read_bytes()
+    tag = b"<UnstructuredGrid>"
+    at = text.index(tag) + len(tag)
+    rows = "".join(
+        f'\n<DataArray type="UInt8" Name={quoteattr(name)} '
+        f'NumberOfTuples="{len(a)}" format="binary">\n{_zlib_base64(a.tobytes())}\n'
+        "</DataArray>" for name, a in arrays.items())
+    path.write_bytes(text[:at] + f"\n<FieldData>{rows}\n</FieldData>".encode() + text[at:])
+
+
+def _zlib_base64(data: bytes) -> str:
+    """VTK's zlib-compressed binary layout in one block: a UInt32 header (1 block, its size
+    twice, its compressed size; in the machine's byte order, the file's) and the compressed
+    bytes, each in base64."""
+    packed = zlib.compress(data)
+    header = np.array([1, len(data), len(data), len(packed)], dtype=np.uint32)
+    return (base64.b64encode(header.tobytes()) + base64.b64encode(packed)).decode()
+
+
+def frame_to_mesh(frame: Frame, plain_names: bool = True) -> meshio.Mesh:
+    """The meshio mesh of one frame (block cells grouped by vertex count, then contacts).
+
+    Parameters
+    ----------
+    frame : dda.result.Frame
+    plain_names : bool
+        Also put the fields that have a unit under their plain names (``"displacement"`` as
+        well as ``"displacement [m]"``).
+    """
+    counts = np.diff(frame.offsets)
+    sizes = np.unique(counts)
+    groups = [np.flatnonzero(counts == k) for k in sizes]
+    n_vertices, n_contacts = len(frame.vertices), len(frame.contact_point)
     points = _pad3(np.concatenate([frame.vertices, frame.contact_point]))
     point_data = {
         "displacement": _pad3(np.concatenate([frame.vertex_displacement,
                                               np.zeros((n_contacts, 2))])),
         "velocity": _pad3(np.concatenate([frame.vertex_velocity, np.zeros((n_contacts, 2))])),
     }
-    cells = []
-    data = {k: [] for k in ("kind", "block_id", "displacement", "velocity", "rotation", "stress",
-                            "normal_force", "shear_force", "contact_state")}
-    for nv in np.unique(counts):
-        blocks = np.flatnonzero(counts == nv)
-        conn = offsets[blocks][:, None] + np.arange(nv)
-        cells.append(("polygon", conn))
-        nb = len(blocks)
-        nan = np.full(nb, np.nan)
-        data["kind"].append(np.zeros(nb))
-        data["block_id"].append(blocks.astype(float))
-        data["displacement"].append(_pad3(frame.displacement[blocks]))
-        data["velocity"].append(_pad3(frame.velocity[blocks, :2]))
-        data["rotation"].append(frame.rotation[blocks])
-        data["stress"].append(frame.stress[blocks])
-        data["normal_force"].append(nan)
-        data["shear_force"].append(nan)
-        data["contact_state"].append(nan)
+    cells = [("polygon", frame.offsets[g][:, None] + np.arange(k))
+             for k, g in zip(sizes, groups, strict=True)]
     if n_contacts:
         cells.append(("vertex", (n_vertices + np.arange(n_contacts))[:, None]))
-        nan = np.full(n_contacts, np.nan)
-        data["kind"].append(np.ones(n_contacts))
-        data["block_id"].append(np.full(n_contacts, -1.0))
-        data["displacement"].append(np.full((n_contacts, 3), np.nan))
-        data["velocity"].append(np.full((n_contacts, 3), np.nan))
-        data["rotation"].append(nan)
-        data["stress"].append(np.full((n_contacts, 3), np.nan))
-        data["normal_force"].append(frame.normal_force.astype(float))
-        data["shear_force"].append(frame.shear_force.astype(float))
-        data["contact_state"].append(frame.contact_state.astype(float))
-    return meshio.Mesh(points, cells, point_data=point_data, cell_data=data)
+    order = np.concatenate(groups) if groups else np.zeros(0, dtype=np.int64)
+    rows = {k: np.concatenate([b, c]) for (k, b), c in zip(
+        _block_rows(frame, order).items(), _contact_rows(frame).values(), strict=True)}
+    # one array per cell block
+    cuts = np.cumsum([len(g) for g in groups] + ([n_contacts] if n_contacts else []))[:-1]
+    cell_data = {field_name(k): np.split(v, cuts) for k, v in rows.items()}
+    point_data = {field_name(k): v for k, v in point_data.items()}
+    if plain_names:
+        cell_data.update({k: list(cell_data[field_name(k)]) for k in PLAIN_NAMES})
+        point_data.update({k: point_data[field_name(k)] for k in PLAIN_NAMES
+                           if field_name(k) in point_data})
+    return meshio.Mesh(points, cells, point_data=point_data, cell_data=cell_data)
+
+
+def _block_rows(frame: Frame, order: np.ndarray) -> dict:
+    """The cell data of the block cells (blocks in the order ``order``), by plain name."""
+    nb = len(order)
+    nan, none = np.full(nb, np.nan), np.full(nb, -1, dtype=np.int64)
+    return {
+        "kind": np.zeros(nb),
+        "block_id": order.astype(np.int64),
+        "shaken": np.isin(order, frame.shaken).astype(np.uint8),
+        "displacement": _pad3(frame.displacement[order]),
+        "velocity": _pad3(frame.velocity[order, :2]),
+        "rotation": frame.rotation[order].astype(float),
+        "stress": frame.stress[order].astype(float),
+        "normal_force": nan, "shear_force": nan,
+        "normal_force_vector": np.full((nb, 3), np.nan),
+        "shear_force_vector": np.full((nb, 3), np.nan),
+        "contact_state": nan, "vertex_block": none, "edge_block": none,
+    }
+
+
+def _contact_rows(frame: Frame) -> dict:
+    """The cell data of the contact cells, by plain name (the keys of :func:`_block_rows`).
+
+    The vectors are the forces on the contact's vertex's block: the normal force along the
+    edge's normal (out of the edge's block), the shear force along the edge's tangent
+    ``tau``, the normal turned clockwise by 90 degrees: ``-shear_force * tau``.
+    """
+    nc = len(frame.contact_point)
+    nan = np.full(nc, np.nan)
+    n = np.asarray(frame.contact_normal, dtype=float).reshape(nc, 2)
+    tau = np.stack([n[:, 1], -n[:, 0]], axis=1)
+    fn = np.asarray(frame.normal_force, dtype=float)
+    fs = np.asarray(frame.shear_force, dtype=float)
+    blocks = np.asarray(frame.contact_blocks, dtype=np.int64).reshape(nc, 2)
+    return {
+        "kind": np.ones(nc),
+        "block_id": np.full(nc, -1, dtype=np.int64),
+        "shaken": np.zeros(nc, dtype=np.uint8),
+        "displacement": np.full((nc, 3), np.nan),
+        "velocity": np.full((nc, 3), np.nan),
+        "rotation": nan,
+        "stress": np.full((nc, 3), np.nan),
+        "normal_force": fn, "shear_force": fs,
+        "normal_force_vector": _pad3(fn[:, None] * n),
+        "shear_force_vector": _pad3(-fs[:, None] * tau),
+        "contact_state": frame.contact_state.astype(float),
+        "vertex_block": blocks[:, 0], "edge_block": blocks[:, 1],
+    }
