@@ -53,6 +53,10 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     [[shake]]                             # a sine, a record, or a CSV file (t, ax[, ay])
     block = "base"
     sine = { amplitude = 2.94, frequency = 2.0, start = 0.0, direction = [1, 0] }
+                                          # form = "from_rest" (the default: the first half
+                                          # wave at half amplitude, the table shakes about a
+                                          # fixed place) or "sine" (a plain sine, which
+                                          # drifts at amplitude / (2 pi frequency) m/s)
     # times = [0, 0.1, ...]  values = [[ax, ay], ...]     or   file = "accel.csv"
 
     [[prescribe]]                         # a constant velocity; leave out x or y to free it
@@ -152,22 +156,94 @@ class SceneFileError(ValueError):
     """An error in a scene file: ``file, line N, key: what is wrong``."""
 
 
+#: the forms of :class:`SineAcceleration`
+SINE_FORMS = ("from_rest", "sine")
+
+
 @dataclass(frozen=True)
 class SineAcceleration:
-    """``amplitude sin(2 pi f (t - start))`` along ``direction`` from ``start`` on (m/s^2).
+    r"""A sine acceleration of ``amplitude`` (m/s^2) and ``frequency`` along ``direction``
+    from ``start`` on, that shakes about a fixed place (``form="from_rest"``, the default) or
+    a plain sine that drifts (``form="sine"``).
 
-    A module-level class, not a lambda, so a run from a scene file can be checkpointed.
+    A table that starts at rest and follows a plain sine, with :math:`\omega = 2\pi f` and
+    :math:`\tau = t - t_0` the time since ``start``,
+
+    .. math::
+
+        a = A \sin\omega\tau, \qquad v = \frac{A}{\omega}(1 - \cos\omega\tau), \qquad
+        u = \frac{A}{\omega}\Bigl(\tau - \frac{\sin\omega\tau}{\omega}\Bigr),
+
+    moves on at the mean velocity :math:`A/\omega = A/(2\pi f)` and drifts without bound:
+    0.55 m/s, 0.53 m in 0.9 s, for 0.7 g at 2 Hz. ``"from_rest"`` runs the first half period
+    at half the amplitude,
+
+    .. math::
+
+        a = \tfrac{A}{2} \sin\omega\tau \quad (\tau < T/2), \qquad
+        a = A \sin\omega\tau \quad (\tau \ge T/2), \qquad T = 1/f,
+
+    so the velocity the half wave builds, :math:`A/\omega` at :math:`T/2`, is the one the
+    full wave needs to have no mean:
+
+    .. math::
+
+        v = -\frac{A}{\omega}\cos\omega\tau, \qquad
+        u = \frac{\pi A}{2\omega^2} - \frac{A}{\omega^2}\sin\omega\tau
+        \qquad (\tau \ge T/2):
+
+    the table starts at rest with zero acceleration, its acceleration is continuous, and
+    after half a period it shakes with amplitude :math:`A/\omega^2` about the place
+    :math:`\pi A/(2\omega^2)` from where it started (43 mm about 68 mm for 0.7 g at 2 Hz).
+    The peak acceleration :math:`A` is reached from the second half period on.
+
+    A module-level class, not a lambda, so a run from a scene file can be checkpointed. Its
+    ``breakpoints`` (``start``, and ``start + T/2`` for ``"from_rest"``, where the
+    acceleration has a kink) make :class:`dda.effects.AccelerationHistory` split a step there,
+    so the table's motion is integrated exactly.
+
+    Examples
+    --------
+    >>> table = SineAcceleration(amplitude=6.87, frequency=2.0)
+    >>> table(0.125), table(0.375)                   # half, then full amplitude
+    ((3.435, 0.0), (-6.87, -0.0))
+    >>> round(6.87 / (2 * math.pi * 2.0), 3)          # a plain sine's drift (m/s)
+    0.547
     """
 
     amplitude: float
     frequency: float
     start: float = 0.0
     direction: tuple = (1.0, 0.0)
+    form: str = "from_rest"
+
+    def __post_init__(self):
+        if self.form not in SINE_FORMS:
+            raise ValueError(f"SineAcceleration: form must be {' or '.join(map(repr, SINE_FORMS))}"
+                             f", got {self.form!r}")
+
+    @property
+    def breakpoints(self) -> tuple:
+        """Times where the acceleration has a kink: ``start`` (and ``start + T/2``)."""
+        if self.form == "sine" or self.frequency <= 0.0:
+            return (self.start,)
+        return (self.start, self.start + 0.5 / self.frequency)
+
+    @property
+    def drift(self) -> float:
+        """Mean velocity (m/s) the table moves on at: ``A / (2 pi f)`` for a plain sine, 0 for
+        the default form."""
+        if self.form == "sine":
+            return self.amplitude / (2.0 * math.pi * self.frequency)
+        return 0.0
 
     def __call__(self, t):
-        if t < self.start:
+        tau = t - self.start
+        if tau < 0.0:
             return (0.0, 0.0)
-        a = self.amplitude * math.sin(2.0 * math.pi * self.frequency * (t - self.start))
+        a = self.amplitude * math.sin(2.0 * math.pi * self.frequency * tau)
+        if self.form == "from_rest" and tau * self.frequency < 0.5:
+            a *= 0.5
         return (a * self.direction[0], a * self.direction[1])
 
 
@@ -676,13 +752,17 @@ def _read_shaking(r, data, blocks, shake, folder) -> list:
 
 def _sine(r, spec, q) -> SineAcceleration:
     """The ``sine = {...}`` of a ``[[shake]]`` table (``q`` is its path)."""
-    sine = r.table(spec, q, {"amplitude", "frequency", "start", "direction"})
+    sine = r.table(spec, q, {"amplitude", "frequency", "start", "direction", "form"})
     check_direction("direction", r.pair(sine, q, "direction", (1.0, 0.0)),
                     f"{r.name}, {_format_path(q)}")
+    form = sine.get("form", "from_rest")
+    if form not in SINE_FORMS:
+        raise r.error((*q, "form"), f"must be {' or '.join(map(repr, SINE_FORMS))} (the plain "
+                      f"sine drifts at amplitude / (2 pi frequency)), got {form!r}")
     return SineAcceleration(r.number(sine, q, "amplitude"),
                             r.number(sine, q, "frequency", positive=True),
                             r.number(sine, q, "start", default=0.0),
-                            r.pair(sine, q, "direction", (1.0, 0.0)))
+                            r.pair(sine, q, "direction", (1.0, 0.0)), form)
 
 
 def _read_motions(r, data, blocks, prescribe_motion) -> list:
