@@ -50,14 +50,25 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     joint_sets = [{ dip = 30, spacing = 0.5, offset = 0.1 },
                   { dip = -60, spacing = 0.7, persistence = 0.8, trace_length = 2.0 }]
 
-    [[shake]]                             # a sine, a record, or a CSV file (t, ax[, ay])
+    [[shake]]                             # a sine, a table, or a record file
     block = "base"
     sine = { amplitude = 2.94, frequency = 2.0, start = 0.0, direction = [1, 0] }
                                           # form = "from_rest" (the default: the first half
                                           # wave at half amplitude, the table shakes about a
                                           # fixed place) or "sine" (a plain sine, which
                                           # drifts at amplitude / (2 pi frequency) m/s)
-    # times = [0, 0.1, ...]  values = [[ax, ay], ...]     or   file = "accel.csv"
+    # times = [0, 0.1, ...]  values = [[ax, ay], ...]     or a file (beside the scene file):
+    # file = "RSN6_ELC180.AT2"            # PEER NGA (g); K-NET/KiK-net .EW .NS .UD .EW1 ...
+                                          # .UD2 (gal, scale factor and mean applied); or a
+                                          # CSV of t, ax[, ay] (m/s^2). format = "at2", "knet"
+                                          # or "csv" when the suffix does not tell
+    # scale = 1.0                         # multiplies the record (and the vertical one)
+    # direction = [1, 0]                  # a one-component record acts along this
+    # vertical = "MYG0041103111446.UD"    # optional: a second record along (0, 1), at the
+                                          # union of both records' sample times
+    # baseline = "none"                   # or "mean", "linear", "quadratic": take a trend
+                                          # away so the table ends at rest
+                                          # (dda.io.records.baseline_correct)
 
     [[prescribe]]                         # a constant velocity; leave out x or y to free it
     block = "top"
@@ -726,17 +737,24 @@ def _read_friction(r, fr, p, folder):
         raise r.error(p, f"law {law!r} raised {type(exc).__name__}: {exc}") from None
 
 
+_RECORD_KEYS = ("format", "scale", "direction", "vertical", "baseline")
+
+
 def _read_shaking(r, data, blocks, shake, folder) -> list:
-    """``[[shake]]``, each given to ``shake`` (a CSV file relative to ``folder``); the
+    """``[[shake]]``, each given to ``shake`` (a record file relative to ``folder``); the
     effects."""
     effects = []
     for i, s in enumerate(_array(r, data, "shake")):
         p = ("shake", i)
-        r.table(s, p, {"block", "sine", "times", "values", "file"})
+        r.table(s, p, {"block", "sine", "times", "values", "file", *_RECORD_KEYS})
         h = _block_of(r, blocks, s, p)
         given = [k for k in ("sine", "times", "file") if k in s]
         if len(given) != 1:
             raise r.error(p, "give one of sine = {...}, times + values, or file")
+        if "file" not in s:
+            for k in _RECORD_KEYS:
+                if k in s:
+                    raise r.error((*p, k), "goes with file = \"...\" (a record file)")
         if "sine" in s:
             r.call(p, shake, h, acceleration=_sine(r, s["sine"], (*p, "sine")))
         elif "times" in s:
@@ -744,10 +762,71 @@ def _read_shaking(r, data, blocks, shake, folder) -> list:
                 raise r.error(p, "times needs values")
             r.call(p, shake, h, acceleration=s["values"], times=s["times"])
         else:
-            t, a = _read_record(r, (*p, "file"), folder / s["file"])
+            t, a = _shake_file(r, s, p, folder)
             r.call(p, shake, h, acceleration=a, times=t)
         effects.append(f"shaking of {h}")
     return effects
+
+
+def _shake_file(r, s, p, folder):
+    """Times and (n, 2) accelerations of a ``[[shake]]`` table's ``file`` (and ``vertical``):
+    a PEER ``.AT2``, K-NET / KiK-net or CSV file (:mod:`dda.io.records`), scaled by ``scale``,
+    its one component along ``direction``, a ``vertical`` one along (0, 1)."""
+    from dda.io import records
+
+    fmt = s.get("format")
+    if fmt is not None and fmt not in ("at2", "knet", "csv"):
+        raise r.error((*p, "format"), f'must be "at2", "knet" or "csv", got {fmt!r}')
+    baseline = s.get("baseline", "none")
+    if baseline not in records.BASELINES:
+        raise r.error((*p, "baseline"), "must be "
+                      f"{', '.join(repr(b) for b in records.BASELINES)}, got {baseline!r}")
+    scale = r.number(s, p, "scale", default=1.0)
+    if scale == 0.0:
+        raise r.error((*p, "scale"), "must not be zero")
+    t, a = _record_file(r, (*p, "file"), folder, s["file"], fmt, baseline)
+    if a.shape[1] == 2:
+        for k in ("direction", "vertical"):
+            if k in s:
+                raise r.error((*p, k), f"{s['file']} has two components (ax, ay): {k} is "
+                                       "for a record of one")
+        return t, scale * a
+    direction = r.pair(s, p, "direction", (1.0, 0.0))
+    if direction == (0.0, 0.0):
+        raise r.error((*p, "direction"), "must not be [0, 0]")
+    check_direction("direction", direction, f"{r.name}, {_format_path((*p, 'direction'))}")
+    a = scale * a[:, 0:1] * np.array(direction)[None, :]
+    if "vertical" in s:
+        tv, av = _record_file(r, (*p, "vertical"), folder, s["vertical"], fmt, baseline)
+        if av.shape[1] != 1:
+            raise r.error((*p, "vertical"), f"{s['vertical']} has two components: vertical "
+                                            "takes a record of one")
+        t, a, av = records.on_common_times(t, a, tv, av)
+        a[:, 1] += scale * av[:, 0]
+    return t, a
+
+
+def _record_file(r, path, folder, name, fmt, baseline):
+    """Times and (n, k) accelerations of one record file (``name``, relative to ``folder``):
+    its format ``fmt`` or the one its suffix tells, its ``baseline`` corrected."""
+    from dda.io import records
+
+    if not isinstance(name, str) or not name.strip():
+        raise r.error(path, f"must be a file name, got {name!r}")
+    file = folder / name
+    fmt = fmt or records.guess_format(file)
+    if fmt is None:
+        raise r.error(path, f"cannot tell the format of {name!r} from its suffix (.AT2; "
+                            ".EW .NS .UD, .EW1 ... .UD2; .csv): give format = \"at2\", "
+                            "\"knet\" or \"csv\"")
+    if fmt == "csv":
+        t, a = _read_record(r, path, file)
+        return t, r.call(path, records.baseline_correct, t, a, baseline)
+    try:
+        rec = records.read_record(file, fmt, baseline=baseline)
+    except records.RecordError as exc:
+        raise r.error(path, str(exc)) from None
+    return rec.times, rec.acceleration[:, None]
 
 
 def _sine(r, spec, q) -> SineAcceleration:
