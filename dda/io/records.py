@@ -63,7 +63,7 @@ def _error(path, line, message) -> RecordError:
     return RecordError(f"{where}: {message}")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Record:
     """One component of a recorded accelerogram.
 
@@ -84,7 +84,8 @@ class Record:
     station, direction : str
         The station (K-NET's station code; PEER's second header line) and the component as the
         file names it (K-NET ``"N-S"``, ``"E-W"``, ``"U-D"``, KiK-net ``"1"`` to ``"6"``
-        or as written; PEER: the last item of its second line, e.g. ``"180"``).
+        or as written; PEER: the last two items of its second line, e.g. ``"El Centro Array
+        #9"`` and ``"180"``).
     scale_factor : float
         What one unit of the file's numbers is in m/s^2: ``g`` for PEER, ``numerator /
         denominator / 100`` for K-NET (its ``3920(gal)/6182761`` per count).
@@ -382,7 +383,7 @@ def read_at2(path, baseline: str = "none") -> Record:
         raise _error(path, None, "a value is not finite")
     parts = [p.strip() for p in lines[1].split(",")]
     rec = Record(times=np.arange(npts) * dt, acceleration=values * G, dt=dt, format="at2",
-                 path=str(path), station=", ".join(parts[:-1]) if len(parts) > 1 else "",
+                 path=str(path), station=parts[-2] if len(parts) > 1 else "",
                  direction=parts[-1] if len(parts) > 1 else "", scale_factor=G,
                  header={"title": lines[0].strip(), "event": lines[1].strip(),
                          "units": units.strip(), "npts": str(npts), "dt": m.group(2)})
