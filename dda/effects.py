@@ -26,6 +26,20 @@ def _as_xy(value, what: str) -> np.ndarray:
     return a
 
 
+def _breakpoints(f, name: str) -> np.ndarray:
+    """The sorted times of a callable's ``breakpoints`` attribute (none: an empty array)."""
+    given = getattr(f, "breakpoints", None)
+    if given is None:
+        return np.zeros(0)
+    try:
+        b = np.asarray(given, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name}: acceleration.breakpoints must be a list of times") from None
+    if not np.all(np.isfinite(b)):
+        raise ValueError(f"{name}: acceleration.breakpoints contains NaN or inf")
+    return np.unique(b[b > 0.0])
+
+
 class TimeTable:
     """A history ``t -> (x, y)`` from samples: linear between them, held outside them.
 
@@ -90,6 +104,12 @@ class AccelerationHistory:
     exact for polynomials of degree 9 over a step) or a sampled record ``times, values``
     taken as piecewise linear in time and integrated exactly; a record that starts after
     t = 0 ramps linearly from zero acceleration at t = 0.
+
+    A callable that is smooth only between known times (a wave switched on at ``start``, an
+    amplitude that changes at some time) may list them in an attribute ``breakpoints`` (a
+    sequence of times): a step across one is integrated piece by piece, split there, so the
+    kink or jump does not spoil the rule's accuracy
+    (:class:`dda.io.scene_file.SineAcceleration` does this).
     """
 
     def __init__(self, acceleration, times=None, name="shake"):
@@ -98,6 +118,7 @@ class AccelerationHistory:
         if times is None and callable(acceleration):
             self._callable = acceleration
             _as_xy(acceleration(0.0), f"{name}: acceleration(t)")
+            self._breaks = _breakpoints(acceleration, name)
             self._t = 0.0
             self._v = np.zeros(2)
             self._u = np.zeros(2)
@@ -204,13 +225,18 @@ class AccelerationHistory:
         t0, v0, u0 = start
         if t < t0 - 1e-15:
             t0, v0, u0 = 0.0, np.zeros(2), np.zeros(2)
-        h = t - t0
-        if h <= 0.0:
+        if t - t0 <= 0.0:
             return u0.copy(), v0.copy(), (t0, v0, u0)
-        s = h * _GL_X
-        a = self._called(t0 + s)
-        v = v0 + h * (_GL_W @ a)
-        u = u0 + v0 * h + h * ((_GL_W * (h - s)) @ a)
+        b = self._breaks
+        inside = b[np.searchsorted(b, t0, side="right"):np.searchsorted(b, t, side="left")]
+        u, v, a0 = u0, v0, t0
+        for a1 in (*inside.tolist(), t):  # split at the callable's breakpoints (rarely any)
+            h = a1 - a0
+            s = h * _GL_X
+            a = self._called(a0 + s)
+            u = u + v * h + h * ((_GL_W * (h - s)) @ a)
+            v = v + h * (_GL_W @ a)
+            a0 = a1
         return u.copy(), v.copy(), (t, v, u)
 
     def state(self, t: float) -> tuple[np.ndarray, np.ndarray]:

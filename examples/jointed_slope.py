@@ -100,24 +100,30 @@ def shaking(t):
     return (0.3 * 9.81 * np.sin(4.0 * np.pi * (t - SETTLE)), 0.0)
 
 
-def build_scene(min_size: float = 0.10, seed: int = 0):
-    """The cut slope on a shaken base with a back wall: (scene, base, the blocks)."""
+def build_scene(min_size: float = 0.10, seed: int = 0, mass=MASS, acceleration=shaking):
+    """The cut slope on a shaken base with a back wall: (scene, base, the blocks).
+
+    ``mass`` is the rock mass (toe, base, back, crest; the default is the 20 m slope) and
+    ``acceleration`` what the base and the wall follow (:meth:`dda.Scene.shake`: a callable
+    or a pair ``(times, values)``)."""
+    back_x, top = mass[1][0], max(y for _, y in mass)
     scene = dda.Scene(gravity=9.81)
-    base = scene.add_block([(0, -3), (64, -3), (64, 0), (0, 0)], ROCK, fixed=True, name="base")
+    base = scene.add_block([(0, -3), (back_x + 4, -3), (back_x + 4, 0), (0, 0)], ROCK,
+                           fixed=True, name="base")
     # the rock mass goes on behind the section: a wall on the base holds its back face
-    back = scene.add_block([(60, 0), (64, 0), (64, 22), (60, 22)], ROCK, fixed=True,
-                           name="back")
+    back = scene.add_block([(back_x, 0), (back_x + 4, 0), (back_x + 4, top + 2),
+                            (back_x, top + 2)], ROCK, fixed=True, name="back")
     blocks = [scene.add_block(b, ROCK, name=f"rock{i}")
-              for i, b in enumerate(cut_blocks(MASS, SETS, min_size=min_size, seed=seed))]
+              for i, b in enumerate(cut_blocks(mass, SETS, min_size=min_size, seed=seed))]
     scene.set_joint(JOINT)
-    scene.shake(base, acceleration=shaking)
-    scene.shake(back, acceleration=shaking)
+    scene.shake(base, acceleration=acceleration)
+    scene.shake(back, acceleration=acceleration)
     return scene, base, blocks
 
 
-def face_blocks(scene, blocks, depth: float = 2.0):
+def face_blocks(scene, blocks, depth: float = 2.0, mass=MASS):
     """The blocks within ``depth`` of the slope face (the ones that can fall)."""
-    (x0, y0), (x1, y1) = MASS[0], MASS[3]
+    (x0, y0), (x1, y1) = mass[0], mass[3]
     n = np.array([y1 - y0, -(x1 - x0)]) / np.hypot(x1 - x0, y1 - y0)  # into the rock
     x, offsets = scene.vertex_arrays()
     out = []

@@ -32,7 +32,7 @@ material = "rock"
 vertices = [[1, 0.5], [1.5, 0.5], [1.5, 1.0], [1, 1.0]]
 [[shake]]
 block = "base"
-sine = { amplitude = 6.0, frequency = 5.0 }
+sine = { amplitude = 6.0, frequency = 5.0, form = "sine" }  # full amplitude at once: slips
 [simulation]
 dt = 2e-3
 duration = 0.1

@@ -97,3 +97,48 @@ def test_user_friction_law(capsys):
     assert runs[("brittle", "newton")][1][-1] > 20 * runs[("coulomb", "newton")][1][-1]
     np.testing.assert_allclose(runs[("brittle", "scene file")][1],
                                runs[("brittle", "newton")][1], rtol=1e-6, atol=1e-9)
+
+
+def test_recorded_shaking_example(tmp_path, capsys):
+    """The jointed slope shaken by a record: without --record the example writes its
+    synthetic .AT2 (0.3 g, ends at rest) and says so; with a K-NET file of one's own it reads
+    that, scaled and baseline corrected. Short runs: they write their files and stay finite."""
+    example = load("recorded_shaking")
+    result, record, moved = example.main(["--out", str(tmp_path), "--duration", "0.05"])
+    out = capsys.readouterr().out
+    assert "no --record given: wrote a synthetic record" in out
+    assert "62 blocks cut from the 8 m slope" in out
+    from dda.io.records import read_at2
+
+    synthetic = read_at2(tmp_path / "synthetic.AT2")
+    assert synthetic.peak == pytest.approx(0.3 * 9.80665, rel=1e-6)
+    assert synthetic.dt == 0.01 and synthetic.duration == pytest.approx(4.0)
+    assert abs(synthetic.end_motion()[0]) < 1e-6  # the table ends at rest
+    assert (tmp_path / "slope.pvd").exists() and (tmp_path / "record.png").stat().st_size > 10_000
+    assert np.all(np.isfinite(moved)) and moved.max() < 0.01
+    from dda.effects import AccelerationHistory
+
+    table = AccelerationHistory(record.acceleration, record.times)  # the base follows it
+    np.testing.assert_allclose(result.displacement("base")[:, 0],
+                               [table.state(t)[0][0] for t in result.time], atol=1e-12)
+    # a K-NET record of one's own (the synthetic motion in counts), halved, corrected
+    t, a = example.synthetic_record(duration=0.5)
+    counts = np.round(a * 100 / (3920 / 6182761)).astype(int)
+    rows = [" ".join(f"{c:8d}" for c in counts[k:k + 8]) for k in range(0, len(counts), 8)]
+    from tests.test_records import KNET_HEADER
+
+    knet = tmp_path / "own.EW"
+    knet.write_text(KNET_HEADER.format(freq=100, direction="E-W", scale="3920(gal)/6182761")
+                    + "\n".join(rows))
+    result, record, moved = example.main(["--out", str(tmp_path / "knet"), "--record",
+                                          str(knet), "--duration", "0.03", "--scale", "0.5",
+                                          "--baseline", "quadratic"])
+    out = capsys.readouterr().out
+    assert "record own.EW (knet, MYG004, E-W): 51 samples at dt 0.01 s" in out
+    from dda.io.records import read_knet
+
+    own = read_knet(knet)  # the counts' mean taken away moves the peak a little: 0.148 g
+    assert f"peak {0.5 * own.peak / 9.80665:.3f} g" in out and "quadratic baseline" in out
+    assert own.peak == pytest.approx(0.3 * 9.80665, rel=0.02)
+    assert record.baseline == "quadratic" and abs(record.end_motion()[0]) < 1e-12
+    assert np.all(np.isfinite(moved))

@@ -110,8 +110,9 @@ def test_a_full_scene_builds_what_the_api_would(tmp_path):
                                          velocity=b.velocity, name=handle.name)
     api.set_joint(scene._joints.default)
     api.set_joint(pair, between=(ids["base"], ids["top"]))
-    api.shake(ids["base"], acceleration=lambda t: (
-        2.0 * np.sin(4.0 * np.pi * (t - 0.01)) if t >= 0.01 else 0.0, 0.0))
+    api.shake(ids["base"], acceleration=lambda t: (  # the sine from rest: half amplitude
+        (1.0 if t < 0.01 + 0.25 else 2.0) * np.sin(4.0 * np.pi * (t - 0.01))  # for T/2
+        if t >= 0.01 else 0.0, 0.0))
     api.add_point_load(ids["top"], (1.5, 2.0), (0.0, -100.0))
     ref = dda.Simulation(api, dt=1e-3, solver=LegacyPullBack(), max_open_close=20).run(0.02)
     for name in ("top", "cut0", "cut1", "cut2"):

@@ -178,7 +178,7 @@ def _history_to_data(f, store, name, where):
     if type(f) is SineAcceleration:
         return {"sine": {"amplitude": float(f.amplitude), "frequency": float(f.frequency),
                          "start": float(f.start),
-                         "direction": [float(v) for v in f.direction]}}
+                         "direction": [float(v) for v in f.direction], "form": str(f.form)}}
     if type(f) is ConstantVelocity:
         return {"constant_velocity": {"vx": None if f.vx is None else float(f.vx),
                                       "vy": None if f.vy is None else float(f.vy)}}
@@ -186,7 +186,7 @@ def _history_to_data(f, store, name, where):
 
 
 def _history_from_data(data, store, where):
-    from dda.io.scene_file import ConstantVelocity, SineAcceleration
+    from dda.io.scene_file import SINE_FORMS, ConstantVelocity, SineAcceleration
 
     _table(data, where, {"time_table", "sine", "constant_velocity", "function"})
     if len(data) != 1:
@@ -202,14 +202,17 @@ def _history_from_data(data, store, where):
                 for k in ("x", "y")]
         return TimeTable(t, *cols, name=str(spec.get("name", "time table")))
     if kind == "sine":
-        _table(spec, w, {"amplitude", "frequency", "start", "direction"},
+        _table(spec, w, {"amplitude", "frequency", "start", "direction", "form"},
                {"amplitude", "frequency", "start", "direction"})
         direction = _list(spec["direction"], w + ".direction")
         if len(direction) != 2:
             raise SceneDataError(f"{w}.direction: expected two numbers")
+        form = spec.get("form", "sine")  # data written before the forms: a plain sine
+        if form not in SINE_FORMS:
+            raise SceneDataError(f"{w}.form: expected one of {list(SINE_FORMS)}, got {form!r}")
         return SineAcceleration(_number(spec, "amplitude", w), _number(spec, "frequency", w),
                                 _number(spec, "start", w),
-                                tuple(_number({"v": v}, "v", w) for v in direction))
+                                tuple(_number({"v": v}, "v", w) for v in direction), form)
     _table(spec, w, {"vx", "vy"}, {"vx", "vy"})
     return ConstantVelocity(_number(spec, "vx", w, allow_none=True),
                             _number(spec, "vy", w, allow_none=True))

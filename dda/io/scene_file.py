@@ -50,10 +50,25 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     joint_sets = [{ dip = 30, spacing = 0.5, offset = 0.1 },
                   { dip = -60, spacing = 0.7, persistence = 0.8, trace_length = 2.0 }]
 
-    [[shake]]                             # a sine, a record, or a CSV file (t, ax[, ay])
+    [[shake]]                             # a sine, a table, or a record file
     block = "base"
     sine = { amplitude = 2.94, frequency = 2.0, start = 0.0, direction = [1, 0] }
-    # times = [0, 0.1, ...]  values = [[ax, ay], ...]     or   file = "accel.csv"
+                                          # form = "from_rest" (the default: the first half
+                                          # wave at half amplitude, the table shakes about a
+                                          # fixed place) or "sine" (a plain sine, which
+                                          # drifts at amplitude / (2 pi frequency) m/s)
+    # times = [0, 0.1, ...]  values = [[ax, ay], ...]     or a file (beside the scene file):
+    # file = "RSN6_ELC180.AT2"            # PEER NGA (g); K-NET/KiK-net .EW .NS .UD .EW1 ...
+                                          # .UD2 (gal, scale factor and mean applied); or a
+                                          # CSV of t, ax[, ay] (m/s^2). format = "at2", "knet"
+                                          # or "csv" when the suffix does not tell
+    # scale = 1.0                         # multiplies the record (and the vertical one)
+    # direction = [1, 0]                  # a one-component record acts along this
+    # vertical = "MYG0041103111446.UD"    # optional: a second record along (0, 1), at the
+                                          # union of both records' sample times
+    # baseline = "none"                   # or "mean", "linear", "quadratic": take a trend
+                                          # away so the table ends at rest
+                                          # (dda.io.records.baseline_correct)
 
     [[prescribe]]                         # a constant velocity; leave out x or y to free it
     block = "top"
@@ -152,22 +167,94 @@ class SceneFileError(ValueError):
     """An error in a scene file: ``file, line N, key: what is wrong``."""
 
 
+#: the forms of :class:`SineAcceleration`
+SINE_FORMS = ("from_rest", "sine")
+
+
 @dataclass(frozen=True)
 class SineAcceleration:
-    """``amplitude sin(2 pi f (t - start))`` along ``direction`` from ``start`` on (m/s^2).
+    r"""A sine acceleration of ``amplitude`` (m/s^2) and ``frequency`` along ``direction``
+    from ``start`` on, that shakes about a fixed place (``form="from_rest"``, the default) or
+    a plain sine that drifts (``form="sine"``).
 
-    A module-level class, not a lambda, so a run from a scene file can be checkpointed.
+    A table that starts at rest and follows a plain sine, with :math:`\omega = 2\pi f` and
+    :math:`\tau = t - t_0` the time since ``start``,
+
+    .. math::
+
+        a = A \sin\omega\tau, \qquad v = \frac{A}{\omega}(1 - \cos\omega\tau), \qquad
+        u = \frac{A}{\omega}\Bigl(\tau - \frac{\sin\omega\tau}{\omega}\Bigr),
+
+    moves on at the mean velocity :math:`A/\omega = A/(2\pi f)` and drifts without bound:
+    0.55 m/s, 0.53 m in 0.9 s, for 0.7 g at 2 Hz. ``"from_rest"`` runs the first half period
+    at half the amplitude,
+
+    .. math::
+
+        a = \tfrac{A}{2} \sin\omega\tau \quad (\tau < T/2), \qquad
+        a = A \sin\omega\tau \quad (\tau \ge T/2), \qquad T = 1/f,
+
+    so the velocity the half wave builds, :math:`A/\omega` at :math:`T/2`, is the one the
+    full wave needs to have no mean:
+
+    .. math::
+
+        v = -\frac{A}{\omega}\cos\omega\tau, \qquad
+        u = \frac{\pi A}{2\omega^2} - \frac{A}{\omega^2}\sin\omega\tau
+        \qquad (\tau \ge T/2):
+
+    the table starts at rest with zero acceleration, its acceleration is continuous, and
+    after half a period it shakes with amplitude :math:`A/\omega^2` about the place
+    :math:`\pi A/(2\omega^2)` from where it started (43 mm about 68 mm for 0.7 g at 2 Hz).
+    The peak acceleration :math:`A` is reached from the second half period on.
+
+    A module-level class, not a lambda, so a run from a scene file can be checkpointed. Its
+    ``breakpoints`` (``start``, and ``start + T/2`` for ``"from_rest"``, where the
+    acceleration has a kink) make :class:`dda.effects.AccelerationHistory` split a step there,
+    so the table's motion is integrated exactly.
+
+    Examples
+    --------
+    >>> table = SineAcceleration(amplitude=6.87, frequency=2.0)
+    >>> table(0.125), table(0.375)                   # half, then full amplitude
+    ((3.435, 0.0), (-6.87, -0.0))
+    >>> round(6.87 / (2 * math.pi * 2.0), 3)          # a plain sine's drift (m/s)
+    0.547
     """
 
     amplitude: float
     frequency: float
     start: float = 0.0
     direction: tuple = (1.0, 0.0)
+    form: str = "from_rest"
+
+    def __post_init__(self):
+        if self.form not in SINE_FORMS:
+            raise ValueError(f"SineAcceleration: form must be {' or '.join(map(repr, SINE_FORMS))}"
+                             f", got {self.form!r}")
+
+    @property
+    def breakpoints(self) -> tuple:
+        """Times where the acceleration has a kink: ``start`` (and ``start + T/2``)."""
+        if self.form == "sine" or self.frequency <= 0.0:
+            return (self.start,)
+        return (self.start, self.start + 0.5 / self.frequency)
+
+    @property
+    def drift(self) -> float:
+        """Mean velocity (m/s) the table moves on at: ``A / (2 pi f)`` for a plain sine, 0 for
+        the default form."""
+        if self.form == "sine":
+            return self.amplitude / (2.0 * math.pi * self.frequency)
+        return 0.0
 
     def __call__(self, t):
-        if t < self.start:
+        tau = t - self.start
+        if tau < 0.0:
             return (0.0, 0.0)
-        a = self.amplitude * math.sin(2.0 * math.pi * self.frequency * (t - self.start))
+        a = self.amplitude * math.sin(2.0 * math.pi * self.frequency * tau)
+        if self.form == "from_rest" and tau * self.frequency < 0.5:
+            a *= 0.5
         return (a * self.direction[0], a * self.direction[1])
 
 
@@ -672,17 +759,24 @@ def _read_friction(r, fr, p, folder):
         raise r.error(p, f"law {law!r} raised {type(exc).__name__}: {exc}") from None
 
 
+_RECORD_KEYS = ("format", "scale", "direction", "vertical", "baseline")
+
+
 def _read_shaking(r, data, blocks, shake, folder) -> list:
-    """``[[shake]]``, each given to ``shake`` (a CSV file relative to ``folder``); the
+    """``[[shake]]``, each given to ``shake`` (a record file relative to ``folder``); the
     effects."""
     effects = []
     for i, s in enumerate(_array(r, data, "shake")):
         p = ("shake", i)
-        r.table(s, p, {"block", "sine", "times", "values", "file"})
+        r.table(s, p, {"block", "sine", "times", "values", "file", *_RECORD_KEYS})
         h = _block_of(r, blocks, s, p)
         given = [k for k in ("sine", "times", "file") if k in s]
         if len(given) != 1:
             raise r.error(p, "give one of sine = {...}, times + values, or file")
+        if "file" not in s:
+            for k in _RECORD_KEYS:
+                if k in s:
+                    raise r.error((*p, k), "goes with file = \"...\" (a record file)")
         if "sine" in s:
             r.call(p, shake, h, acceleration=_sine(r, s["sine"], (*p, "sine")))
         elif "times" in s:
@@ -690,21 +784,86 @@ def _read_shaking(r, data, blocks, shake, folder) -> list:
                 raise r.error(p, "times needs values")
             r.call(p, shake, h, acceleration=s["values"], times=s["times"])
         else:
-            t, a = _read_record(r, (*p, "file"), folder / s["file"])
+            t, a = _shake_file(r, s, p, folder)
             r.call(p, shake, h, acceleration=a, times=t)
         effects.append(f"shaking of {h}")
     return effects
 
 
+def _shake_file(r, s, p, folder):
+    """Times and (n, 2) accelerations of a ``[[shake]]`` table's ``file`` (and ``vertical``):
+    a PEER ``.AT2``, K-NET / KiK-net or CSV file (:mod:`dda.io.records`), scaled by ``scale``,
+    its one component along ``direction``, a ``vertical`` one along (0, 1)."""
+    from dda.io import records
+
+    fmt = s.get("format")
+    if fmt is not None and fmt not in ("at2", "knet", "csv"):
+        raise r.error((*p, "format"), f'must be "at2", "knet" or "csv", got {fmt!r}')
+    baseline = s.get("baseline", "none")
+    if baseline not in records.BASELINES:
+        raise r.error((*p, "baseline"), "must be "
+                      f"{', '.join(repr(b) for b in records.BASELINES)}, got {baseline!r}")
+    scale = r.number(s, p, "scale", default=1.0)
+    if scale == 0.0:
+        raise r.error((*p, "scale"), "must not be zero")
+    t, a = _record_file(r, (*p, "file"), folder, s["file"], fmt, baseline)
+    if a.shape[1] == 2:
+        for k in ("direction", "vertical"):
+            if k in s:
+                raise r.error((*p, k), f"{s['file']} has two components (ax, ay): {k} is "
+                                       "for a record of one")
+        return t, scale * a
+    direction = r.pair(s, p, "direction", (1.0, 0.0))
+    if direction == (0.0, 0.0):
+        raise r.error((*p, "direction"), "must not be [0, 0]")
+    check_direction("direction", direction, f"{r.name}, {_format_path((*p, 'direction'))}")
+    a = scale * a[:, 0:1] * np.array(direction)[None, :]
+    if "vertical" in s:
+        tv, av = _record_file(r, (*p, "vertical"), folder, s["vertical"], fmt, baseline)
+        if av.shape[1] != 1:
+            raise r.error((*p, "vertical"), f"{s['vertical']} has two components: vertical "
+                                            "takes a record of one")
+        t, a, av = records.on_common_times(t, a, tv, av)
+        a[:, 1] += scale * av[:, 0]
+    return t, a
+
+
+def _record_file(r, path, folder, name, fmt, baseline):
+    """Times and (n, k) accelerations of one record file (``name``, relative to ``folder``):
+    its format ``fmt`` or the one its suffix tells, its ``baseline`` corrected."""
+    from dda.io import records
+
+    if not isinstance(name, str) or not name.strip():
+        raise r.error(path, f"must be a file name, got {name!r}")
+    file = folder / name
+    fmt = fmt or records.guess_format(file)
+    if fmt is None:
+        raise r.error(path, f"cannot tell the format of {name!r} from its suffix (.AT2; "
+                            ".EW .NS .UD, .EW1 ... .UD2; .csv): give format = \"at2\", "
+                            "\"knet\" or \"csv\"")
+    if fmt == "csv":
+        t, a = _read_record(r, path, file)
+        return t, r.call(path, records.baseline_correct, t, a, baseline)
+    try:
+        rec = records.read_record(file, fmt, baseline=baseline)
+    except records.RecordError as exc:
+        raise r.error(path, str(exc)) from None
+    return rec.times, rec.acceleration[:, None]
+
+
 def _sine(r, spec, q) -> SineAcceleration:
     """The ``sine = {...}`` of a ``[[shake]]`` table (``q`` is its path)."""
-    sine = r.table(spec, q, {"amplitude", "frequency", "start", "direction"})
+    sine = r.table(spec, q, {"amplitude", "frequency", "start", "direction", "form"})
     check_direction("direction", r.pair(sine, q, "direction", (1.0, 0.0)),
                     f"{r.name}, {_format_path(q)}")
+    form = sine.get("form", "from_rest")
+    if form not in SINE_FORMS:
+        raise r.error((*q, "form"), f"must be {' or '.join(map(repr, SINE_FORMS))} (the plain "
+                      f"sine drifts at amplitude / (2 pi frequency)), got {form!r}")
     return SineAcceleration(r.number(sine, q, "amplitude"),
                             r.number(sine, q, "frequency", positive=True),
                             r.number(sine, q, "start", default=0.0),
-                            r.pair(sine, q, "direction", (1.0, 0.0)))
+                            r.pair(sine, q, "direction", (1.0, 0.0)), form)
 
 
 def _read_motions(r, data, blocks, prescribe_motion) -> list:
