@@ -88,10 +88,10 @@ class Recorder:
         """A step was committed; record it when it is the ``every``-th or the ``last``."""
         self.since += 1
         if self.since >= self.every or last:
-            self._record(state)
+            self._record(state, end=last)
             self.since = 0
 
-    def _record(self, state):
+    def _record(self, state, end=False):
         keys, f, n = pair_forces(self.model, state)
         # the result needs block centroids only; a full Frame is built when a writer asks
         self.result.record(state.time, state.centroid - self.model.centroid_initial,
@@ -99,10 +99,13 @@ class Recorder:
         writer = self.writer
         if writer is None:
             return
-        last = getattr(writer, "last_time", None)
-        if last is None and writer is self.written[0]:
-            last = self.written[1]
-        if last != state.time:
-            writer.write(frame(self.model, state))
+        written = getattr(writer, "last_time", None)
+        if written is None and writer is self.written[0]:
+            written = self.written[1]
+        if written != state.time:
+            if end and getattr(writer, "every", 1) > 1:  # a series ends at the run's end
+                writer.write(frame(self.model, state), last=True)
+            else:
+                writer.write(frame(self.model, state))
             self.result.frames_written += 1
             self.written = (writer, state.time)

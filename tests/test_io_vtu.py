@@ -36,6 +36,22 @@ def test_pvd_lists_every_file(run_with_output):
         assert f.exists() and f.name == e.get("file")
 
 
+def test_a_series_written_every_few_frames_ends_at_the_runs_end(tmp_path, rock):
+    """VTUWriter(every=3) over 10 recorded steps writes frames 0, 3, 6, 9 and the last one
+    (t = 0.01 s): a series that stopped at 0.009 s showed a slope 17 ms before its end."""
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True, name="base")
+    scene.add_block(box(0.4, 0.2, 0.2, 0.2), rock, name="top")
+    scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
+                                  friction=CoulombSingle(phi=30)))
+    writer = dda.io.VTUWriter(tmp_path / "case", every=3)
+    dda.Simulation(scene, dt=1e-3).run(duration=0.01, output=writer)
+    times = [float(e.get("timestep")) for e in
+             ET.parse(writer.pvd_path).getroot().findall("./Collection/DataSet")]
+    np.testing.assert_allclose(times, [0.0, 0.003, 0.006, 0.009, 0.01], atol=1e-12)
+    assert len(writer.files) == 5
+
+
 def _block_rows(mesh, name):
     ids = np.concatenate(mesh.cell_data["block_id"])
     vals = np.concatenate(mesh.cell_data[name])

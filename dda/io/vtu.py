@@ -130,8 +130,10 @@ class VTUWriter:
         """The .vtu files written so far."""
         return [self.prefix.parent / name for _, name in self._entries[:self._n]]
 
-    def write(self, frame: Frame) -> None:
-        """Write one frame (called by the simulation at every recorded step).
+    def write(self, frame: Frame, last: bool = False) -> None:
+        """Write one frame (called by the simulation at every recorded step); every
+        ``every``-th is written, and the ``last`` of a run whatever the count, so a series
+        always ends at the run's end.
 
         The file is written under a temporary name and renamed, and the writer's count is
         updated only after that, in one statement: a run interrupted anywhere in here leaves
@@ -139,7 +141,7 @@ class VTUWriter:
         (``last_time`` tells a resumed run which frame the writer has).
         """
         n = self._n
-        if self._seen % self.every == 0:
+        if self._seen % self.every == 0 or last:
             name = f"{self.prefix.name}_{n:05d}.vtu"
             path = self.prefix.parent / name
             tmp = path.with_name(path.name + ".tmp.vtu")
