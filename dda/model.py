@@ -19,6 +19,7 @@ from dda.contact.detection import Memo, VertexTopology
 from dda.contact.friction import FrictionLaw
 from dda.kernels.joints import deepest_spring, joint_rows
 from dda.scene import Scene
+from dda.water import water_forces
 
 __all__ = ["JointTable", "Model"]
 
@@ -181,6 +182,9 @@ class Model:
             self.free[m.block] = False
         self.constraint_penalty = 100.0 * young.max()
         self.damping = scene.damping_coefficients()
+        self.water = scene.water
+        # the edges (by first vertex) the water can load: the free blocks'
+        self.water_edges = np.flatnonzero(self.free[self.topo.block])
         self.joints = JointTable.from_scene(scene, nb)
         self._compile_loads(scene.point_loads)
         self._compile_springs(x0)
@@ -225,7 +229,8 @@ class Model:
         """Whether the blocks' system is stiffness, mass, gravity and stress alone: no
         damping, point loads or constraint springs (a step then takes the compiled block
         kernels of :mod:`dda.kernels.blocks`)."""
-        return self.damping is None and not len(self.load_block) and not len(self.spring_block)
+        return (self.damping is None and not len(self.load_block) and not len(self.spring_block)
+                and self.__dict__.get("water") is None)
 
     @property
     def moves_known(self) -> bool:
@@ -292,12 +297,13 @@ class Model:
             u[m.block] = m.displacement(t1)
         return u, v, tuple(after)
 
-    def block_forces(self, t1, ints, stress, load_points, spring_points):
+    def block_forces(self, t1, ints, stress, load_points, spring_points, x=None):
         """Block stiffness, mass, damping and external forces (METHOD.md sections 1 and 2).
 
         ``ints`` are the polygon integrals of the blocks at the step's start, ``stress`` the
         blocks' committed stresses, the points the current places of the loads' and springs'
-        material points. Returns (nb, 6, 6) k, m and c (None without damping) and (nb, 6) f.
+        material points, ``x`` the vertices at the step's start (for the water pressure).
+        Returns (nb, 6, 6) k, m and c (None without damping) and (nb, 6) f.
         """
         k = geometry.stiffness_matrices(ints.area, self.elasticity)
         m = geometry.mass_matrices(ints, self.density)
@@ -310,6 +316,9 @@ class Model:
             f[:, 1] -= self.gravity * self.density * ints.area
         f[:, 3:] -= ints.area[:, None] * stress
         centroid = ints.centroid
+        if self.__dict__.get("water") is not None:
+            f += water_forces(self.water, self.x_initial if x is None else x, self.topo.nxt,
+                              self.topo.block, centroid, self.water_edges)
         if len(self.load_block):
             forces = self.load_constant.copy()
             for i, history in self.load_varying:  # one user callable per time-varying load

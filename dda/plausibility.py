@@ -19,7 +19,8 @@ import warnings
 import numpy as np
 
 __all__ = ["PlausibilityWarning", "check_angle", "check_density", "check_direction",
-           "check_gravity", "check_time_step", "check_young", "YOUNG_RANGE", "DENSITY_RANGE"]
+           "check_gravity", "check_time_step", "check_unit_weight", "check_young", "YOUNG_RANGE",
+           "DENSITY_RANGE"]
 
 #: Young's moduli (Pa) between which no warning is given: soft soil to diamond
 YOUNG_RANGE = (1e5, 1e13)
@@ -91,6 +92,13 @@ def check_gravity(value: float) -> None:
     elif value > 0.0 and not 0.1 <= value <= 100.0:
         _warn(f"Scene: gravity = {value:g} m/s^2 is orders of magnitude off Earth's 9.81 "
               "(in mm/s^2 or g?)")
+
+
+def check_unit_weight(value: float) -> None:
+    """A water unit weight orders of magnitude off 9810 N/m^3 (kN/m^3 typed, or a density)."""
+    if not 5e3 <= value <= 2e4:
+        _warn(f"Scene.set_water_table: unit_weight = {value:g} N/m^3 is far from water's 9810 "
+              "(in kN/m^3, or a density in kg/m^3?)")
 
 
 def check_direction(name: str, vector, where: str) -> None:

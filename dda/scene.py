@@ -13,7 +13,8 @@ from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
 from dda.errors import OverlapError
 from dda.materials import LinearElastic
-from dda.plausibility import check_gravity
+from dda.plausibility import check_gravity, check_unit_weight
+from dda.water import WaterTable
 
 __all__ = ["Block", "Scene", "MAX_BLOCKS", "MAX_VERTICES", "OVERLAP_TOLERANCE"]
 
@@ -381,6 +382,45 @@ class Scene:
                                 f"indices, got {blocks!r}") from None
         self._damping.append(_Damping(chosen, a, b))
 
+    def set_water_table(self, table, unit_weight: float = 9810.0) -> None:
+        """Water in the joints below a water table (:mod:`dda.water`).
+
+        Every block edge below the table takes the hydrostatic pressure
+        ``unit_weight * (h(x) - y)`` as a surface traction, integrated exactly along the edge
+        with the geometry of each step's start; joints carry it on both faces, so their
+        contact forces are effective forces (uplift, a water-filled tension crack's push).
+
+        Parameters
+        ----------
+        table : float or sequence of (x, y)
+            A level (the table's height, m), or a polyline of strictly increasing x that
+            spans every block's x at the start (constant beyond its ends while blocks move).
+        unit_weight : float
+            Of the water, N/m^3 (9810 for fresh water).
+        """
+        gamma = finite_number("unit_weight", unit_weight, positive=True,
+                              where="Scene.set_water_table")
+        check_unit_weight(gamma)
+        if np.ndim(table) == 0:
+            self._water = WaterTable.level(finite_number("table", table,
+                                                         where="Scene.set_water_table"), gamma)
+            return
+        points = np.asarray(table, dtype=float)
+        if points.ndim != 2 or points.shape[1] != 2 or len(points) < 2:
+            raise ValueError("Scene.set_water_table: table must be a level or a polyline of "
+                             f"at least 2 (x, y) points, got an array of shape {points.shape}")
+        if not np.all(np.isfinite(points)):
+            raise ValueError("Scene.set_water_table: the table's points contain NaN or inf")
+        if np.any(np.diff(points[:, 0]) <= 0):
+            raise ValueError("Scene.set_water_table: the table's x must increase strictly "
+                             "(one height above each x)")
+        self._water = WaterTable(points[:, 0].copy(), points[:, 1].copy(), gamma)
+
+    @property
+    def water(self) -> WaterTable | None:
+        """The water table (:meth:`set_water_table`), or None: a dry scene."""
+        return self.__dict__.get("_water")
+
     def damping_coefficients(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Per block (mass, stiffness) damping coefficients, or None without damping."""
         n = len(self._blocks)
@@ -453,6 +493,13 @@ class Scene:
                     "the scene has no default joint: call scene.set_joint(JointMaterial(...))"
                 )
         verts, offsets = self.vertex_arrays()
+        water = self.water
+        if water is not None and not water.is_level:
+            low, high = verts[:, 0].min(), verts[:, 0].max()
+            if water.x[0] > low or water.x[-1] < high:
+                raise ValueError(
+                    f"the water table spans x = {water.x[0]:g} to {water.x[-1]:g} m, not the "
+                    f"scene's width, {low:g} to {high:g} m: extend it to cover every block")
         bad = overlap_depths(verts, offsets, OVERLAP_TOLERANCE)
         if bad:
             a, b, depth = max(bad, key=lambda abd: abd[2])

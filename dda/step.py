@@ -196,7 +196,7 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     else:
         ints = geometry.polygon_integrals(state.x, model.offsets, model.topo.nxt)
         k, m, c, f = model.block_forces(t1, ints, state.stress, state.load_points,
-                                        state.spring_points)
+                                        state.spring_points, state.x)
         v_eff = state.velocity * carry if carry else None
         k_eff, f_eff = effective_system(k, m, f, v_eff, dt, c)
         speed = None

@@ -333,6 +333,8 @@ def scene_to_data(scene, store: ArrayStore) -> dict:
                      "mass": float(d.mass), "stiffness": float(d.stiffness)}
                     for d in scene.damping_settings],
     }
+    if scene.water is not None:
+        data["water"] = scene.water.as_data()
     for k, s in enumerate(scene.shakes):
         where = f"the shaking of block {names[s.block]!r}"
         record = s.history.record
@@ -365,7 +367,7 @@ def scene_from_data(data, store: ArrayStore):
     """The :class:`dda.Scene` of :func:`scene_to_data`'s data (every input checked again)."""
     from dda.scene import Scene
 
-    _table(data, "scene", _SCENE_KEYS, _SCENE_KEYS)
+    _table(data, "scene", _SCENE_KEYS | {"water"}, _SCENE_KEYS)  # (no water: a dry scene)
     try:
         limits = {k: data[k] for k in ("max_blocks", "max_vertices")}
         if not all(isinstance(v, int) and not isinstance(v, bool) for v in limits.values()):
@@ -445,6 +447,11 @@ def scene_from_data(data, store: ArrayStore):
             _table(d, w, {"blocks", "mass", "stiffness"}, {"blocks", "mass", "stiffness"})
             scene.set_damping(mass=_number(d, "mass", w), stiffness=_number(d, "stiffness", w),
                               blocks=d["blocks"])
+        if "water" in data:
+            w = _table(data["water"], "scene.water", {"table", "unit_weight"},
+                       {"table", "unit_weight"})
+            scene.set_water_table(w["table"], unit_weight=_number(w, "unit_weight",
+                                                                  "scene.water"))
     except SceneDataError:
         raise
     except (TypeError, ValueError, KeyError, IndexError) as exc:

@@ -88,6 +88,10 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     stiffness = 1e-4                      # s
     blocks = ["top"]                      # optional: default every block
 
+    [water]                               # hydrostatic pressure on every edge below it
+    table = 1.5                           # a level (m), or [[x, y], ...] with x increasing
+    unit_weight = 9810.0                  # N/m^3 (the default)
+
     [simulation]
     dt = 1e-3                             # or "auto" (dda.auto_settings; dda info says why)
     duration = 1.0
@@ -480,7 +484,7 @@ class LoadedScene:
 
 #: the tables of a scene file, in the order they are read
 _TABLES = ("scene", "materials", "blocks", "cut", "joints", "shake", "prescribe", "load",
-           "damping", "simulation", "output")
+           "damping", "water", "simulation", "output")
 
 
 def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
@@ -539,6 +543,7 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     _read_damping(r, data, blocks, scene.set_damping)
     if scene.damping_coefficients() is not None:
         effects.append("damping")
+    effects += _read_water(r, data, scene.set_water_table)
     solver, settings, duration = _read_simulation(r, data, settings=(
         "dt", "analysis", "velocity_carry", "max_open_close", "record_every",
         "max_displacement_ratio", "penetration_tolerance"))
@@ -929,6 +934,21 @@ def _read_damping(r, data, blocks, set_damping):
         r.call(p, set_damping, mass=r.number(dm, p, "mass", default=0.0),
                stiffness=r.number(dm, p, "stiffness", default=0.0),
                blocks=None if names is None else [blocks[n] for n in names])
+
+
+def _read_water(r, data, set_water_table) -> list:
+    """``[water]``: ``table`` (a level, or [[x, y], ...]) and ``unit_weight``."""
+    if "water" not in data:
+        return []
+    p = ("water",)
+    w = r.table(data["water"], p, {"table", "unit_weight"})
+    if "table" not in w:
+        raise r.error(p, "needs 'table': a level (m) or a polyline [[x, y], ...]")
+    table = w["table"]
+    table = r.number(w, p, "table") if not isinstance(table, list) else r.points(w, p, "table")
+    r.call(p, set_water_table, table,
+           unit_weight=r.number(w, p, "unit_weight", default=9810.0, positive=True))
+    return ["water table"]
 
 
 def _read_simulation(r, data, settings):
