@@ -194,7 +194,7 @@ def test_demo_and_the_console_entry_point(tmp_path):
                            "--duration", "0.05", "--no-progress"],
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
-    assert "wrote 3 VTU files" in proc.stdout
+    assert "wrote 4 VTU files" in proc.stdout  # steps 0, 10, 20 and the last, 25
     assert (tmp_path / "demo.pvd").is_file()
 
 
