@@ -312,7 +312,7 @@ def test_the_file_format_covers_every_api_setting():
     scene_methods = {"add_block": "scene.add_block", "set_joint": "scene.set_joint",
                      "shake": "scene.shake", "prescribe_motion": "scene.prescribe_motion",
                      "add_point_load": "scene.add_point_load",
-                     "set_damping": "scene.set_damping"}
+                     "set_damping": "scene.set_damping", "add_bolt": "scene.add_bolt"}
     public = {n for n, v in vars(dda.Scene).items() if callable(v) and not n.startswith("_")}
     readers = {"block", "joint_for", "validate", "vertex_arrays", "damping_coefficients"}
     assert public - readers == set(scene_methods), "a new Scene method needs a table"
