@@ -52,6 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda import geometry
+from dda.kernels.bolts import bolt_rows, moved_bolt_points
 from dda.kernels.pair_stiffness import PairStiffness
 
 __all__ = ["BoltTable", "BoltTerm", "bolt_energy", "bolt_label", "moved_points",
@@ -132,15 +133,31 @@ class BoltTable:
         """The step's :class:`BoltTerm` of the bolts not ``broken`` at ``points`` (the step's
         start), on blocks whose centroids are ``centroid`` (n_blocks, 2); None when every
         bolt is broken."""
-        idx = np.flatnonzero(~broken)
-        if not len(idx):
-            return None
-        blocks = self.blocks[idx]
-        pts = points[idx]
-        force = self.pretension[idx] + self.stiffness[idx] * (
-            _lengths(pts) - self.length[idx])
-        return BoltTerm.build(blocks[:, 0], blocks[:, 1], pts, centroid, self.stiffness[idx],
-                              force, idx)
+        if broken.any():
+            idx = np.flatnonzero(~broken)
+            if not len(idx):
+                return None
+            blocks, pts, k = self.blocks[idx], points[idx], self.stiffness[idx]
+            force = self.pretension[idx] + k * (_lengths(pts) - self.length[idx])
+        else:  # (the common case: every bolt, no copies)
+            idx, blocks, pts, k = self._all, self.blocks, points, self.stiffness
+            force = self.pretension + k * (_lengths(pts) - self.length)
+        a, b = blocks[:, 0], blocks[:, 1]
+        rows, weights, f = bolt_rows(np.ascontiguousarray(pts, dtype=np.float64), a, b,
+                                     np.ascontiguousarray(centroid, dtype=np.float64),
+                                     k, force)
+        return BoltTerm(a, b, rows, weights, f, idx)
+
+    @property
+    def _all(self) -> np.ndarray:
+        return np.arange(len(self.blocks))
+
+    def moved(self, points: np.ndarray, centroid: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """The bolts' ends ``points`` (n, 2, 2) moved by the blocks' increments ``d`` from a
+        step's start whose centroids are ``centroid`` (:func:`moved_points`, compiled)."""
+        return moved_bolt_points(np.ascontiguousarray(points, dtype=np.float64), self.blocks,
+                                 np.ascontiguousarray(centroid, dtype=np.float64),
+                                 np.ascontiguousarray(d, dtype=np.float64))
 
 
 @dataclass(frozen=True)

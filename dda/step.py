@@ -23,7 +23,6 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from dda import geometry
-from dda.bolts import moved_points
 from dda.contact import element as element_module
 from dda.contact.contacts import OPEN, ContactSet, carry_over
 from dda.contact.dashpot import (
@@ -285,7 +284,7 @@ def _break_bolts(model, state, solver, problem, sol, centroid):
     broken = state.bolt_broken
     passes = iterations = 0
     while sol.converged:
-        ends = moved_points(state.bolt_points, bolts.blocks, centroid, sol.d)
+        ends = bolts.moved(state.bolt_points, centroid, sol.d)
         i = bolts.to_break(bolts.forces(ends, broken), broken)
         if i < 0:
             break
@@ -664,7 +663,7 @@ def _advanced(model, state, dt, sol, centroid, ended: _Ended, v_eff, known,
             spring_points, centroid[model.spring_block], d[model.spring_block])
     bolt_points = state.bolt_points
     if model.bolts is not None:
-        bolt_points = moved_points(bolt_points, model.bolts.blocks, centroid, d)
+        bolt_points = model.bolts.moved(bolt_points, centroid, d)
     return StepState(
         time=state.time + dt, x=ended.x_new, velocity=vel, stress=stress,
         rotation=rotation,

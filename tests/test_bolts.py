@@ -11,13 +11,14 @@ import dda.step as step_module
 from dda.bolts import BoltTerm, moved_points
 from dda.contact import CoulombSingle, JointMaterial
 from dda.contact.tangent import _TANGENT_TERMS, SPRING_TERMS
+from dda.effects import TimeTable
 from dda.geometry import t_matrix
 from dda.io.scene_data import ArrayStore, scene_from_data, scene_to_data
 from dda.io.scene_file import SceneFileError, load_scene
 from dda.kernels import small_step
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.materials import LinearElastic
-from dda.solvers import LegacyPullBack, NewtonRaphson
+from dda.solvers import LegacyPullBack, NewtonRaphson, linear
 from tests.conftest import box, incline_scene
 
 G = 9.81
@@ -67,6 +68,35 @@ def test_bolt_terms_are_the_energy_derivatives(stretch):
     d = np.linspace(-1e-3, 1e-3, 12)
     np.testing.assert_allclose(term.residual(d.reshape(2, 6))[0],
                                stiffness @ d - term.force[0], rtol=1e-12)
+
+
+def test_the_compiled_terms_are_the_numpy_ones():
+    """dda.kernels.bolts against BoltTerm.build and moved_points (numpy, the reference)."""
+    scene, top, t = bolted_incline(20.0, stiffness=3e7)
+    scene.add_bolt(top, 2.5 * t + (0.1, 0.1), "base", 2.5 * t - (0.1, 0.3), stiffness=2e6,
+                   pretension=1e4)
+    model = dda.Simulation(scene, dt=1e-3).model
+    rng = np.random.default_rng(3)
+    points = model.bolts.points + rng.normal(scale=1e-3, size=(2, 2, 2))
+    centroid = model.centroid_initial + rng.normal(scale=1e-3, size=(2, 2))
+    for broken in ([False, False], [True, False]):
+        broken = np.array(broken)
+        term = model.bolts.term(points, broken, centroid)
+        keep = ~broken
+        length = np.hypot(*(points[keep, 1] - points[keep, 0]).T)
+        n0 = model.bolts.pretension[keep] + model.bolts.stiffness[keep] * (
+            length - model.bolts.length[keep])
+        ref = BoltTerm.build(model.bolts.blocks[keep, 0], model.bolts.blocks[keep, 1],
+                             points[keep], centroid, model.bolts.stiffness[keep], n0)
+        for name in ("bj", "bk", "rows", "weights", "force"):
+            np.testing.assert_allclose(getattr(term, name), getattr(ref, name), rtol=1e-14,
+                                       atol=1e-14 * np.abs(getattr(ref, name)).max())
+        np.testing.assert_array_equal(term.index, np.flatnonzero(keep))
+    assert model.bolts.term(points, np.array([True, True]), centroid) is None
+    d = rng.normal(scale=1e-2, size=(2, 6))
+    np.testing.assert_allclose(model.bolts.moved(points, centroid, d),
+                               moved_points(points, model.bolts.blocks, centroid, d),
+                               rtol=1e-15, atol=1e-15)
 
 
 @pytest.mark.parametrize("terms, rows", [(SPRING_TERMS, 2), (_TANGENT_TERMS, 5)],
@@ -210,6 +240,55 @@ def test_two_bolts_overloaded_in_one_step_break_one_at_a_time(solver):
     assert result.bolt_force(0)[-1] == pytest.approx(weight, rel=0.05)
 
 
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_bolts_between_free_blocks_dense_and_sparse(solver, monkeypatch):
+    """The series of two bolts (one between two free blocks) without strengths: the upper
+    one ends carrying both blocks, the lower one its block; the sparse assembly
+    (``DENSE_LIMIT`` 0) gives the dense one's numbers."""
+    weight = 2500.0 * 0.25 * G
+    runs = []
+    for limit in (linear.DENSE_LIMIT, 0):
+        monkeypatch.setattr(linear, "DENSE_LIMIT", limit)
+        # (a solver of its own: a solver keeps its last system's layout)
+        sim = dda.Simulation(_series((None, None)), dt=0.1, solver=type(solver)(),
+                             analysis="static")
+        runs.append(sim.run(2.0))
+    dense, sparse = runs
+    for i, load in ((0, 2 * weight), (1, weight)):
+        # (the bolts stretch the blocks, whose weight grows with their area: 1e-5)
+        assert dense.bolt_force(i)[-1] == pytest.approx(load, rel=1e-4)
+        np.testing.assert_allclose(sparse.bolt_force(i), dense.bolt_force(i), rtol=1e-9)
+
+
+def test_a_bolt_to_a_moved_block_follows_its_motion():
+    """A block hung by a bolt from a roof whose motion is prescribed (a known block: its
+    increment goes to the right-hand side): the block follows the roof up by 0.1 m and hangs
+    W / k below where it started."""
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=G)
+    roof = scene.add_block(box(0, 2, 1, 0.5), rock, name="roof")
+    low = scene.add_block(box(0.25, 1.0, 0.5, 0.5), rock, name="low")
+    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                                  friction=CoulombSingle(phi=30.0)))
+    scene.prescribe_motion(roof, TimeTable([0.0, 0.5, 10.0], x=[0.0, 0.0, 0.0],
+                                           y=[0.0, 0.1, 0.1]))
+    k = 1e6
+    scene.add_bolt(low, (0.5, 1.25), roof, (0.5, 2.25), stiffness=k)
+    result = dda.Simulation(scene, dt=0.02, analysis="static").run(2.0)
+    weight = 2500.0 * 0.25 * G
+    assert result.bolt_force(0)[-1] == pytest.approx(weight, rel=1e-6)
+    assert result.displacement(low)[-1, 1] == pytest.approx(0.1 - weight / k, rel=1e-6)
+
+
+def test_bolt_energy_is_its_elastic_energy():
+    """A pretensioned bolt holds N^2 / (2 k) of energy from the start (dda.energy)."""
+    scene, top, t = bolted_incline(20.0, stiffness=1e7)
+    scene.add_bolt(top, 2.5 * t + (0.1, 0.1), "base", 2.5 * t - (0.1, 0.3), stiffness=2e6,
+                   pretension=1e4)
+    sim = dda.Simulation(scene, dt=1e-3)
+    assert sim.energy().bolt == pytest.approx(0.5 * 1e4**2 / 2e6, rel=1e-12)
+
+
 # ---------------------------------------------------------------------- pretension
 @pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
 def test_pretension_presses_the_block_on_its_base(solver):
@@ -291,6 +370,16 @@ def test_scene_file_bolt_round_trip(tmp_path):
         np.testing.assert_array_equal(getattr(back.bolts[0], key), value)
     result = loaded.run()
     assert result.bolt_force(0)[0] == 2000.0
+
+
+def test_dda_info_lists_the_bolts(tmp_path):
+    from dda.cli import describe
+
+    path = tmp_path / "bolted.toml"
+    path.write_text(SCENE_FILE.replace("STIFFNESS", "1e7"))
+    text = describe(load_scene(path), budget=0.05)
+    assert ("effects    gravity, bolt 0 from block 'top' to block 'base' (1e+07 N/m, "
+            "pretension 2000 N/m, strength 1e+06 N/m)") in text
 
 
 def test_scene_file_bolt_errors_name_the_line(tmp_path):

@@ -774,12 +774,15 @@ def _read_bolts(r, data, blocks, add_bolt) -> list:
         for key in ("point_a", "point_b"):
             if key not in b:
                 raise r.error(p, f"needs '{key}'")
+        stiffness = r.number(b, p, "stiffness")
+        pretension = r.number(b, p, "pretension", default=0.0)
         strength = r.number(b, p, "strength") if "strength" in b else None
         index = r.call(p, add_bolt, ha, r.pair(b, p, "point_a", None), hb,
-                       r.pair(b, p, "point_b", None), r.number(b, p, "stiffness"),
-                       pretension=r.number(b, p, "pretension", default=0.0),
+                       r.pair(b, p, "point_b", None), stiffness, pretension=pretension,
                        strength=strength)
-        effects.append(f"bolt {index} from {ha} to {hb}")
+        more = f", pretension {pretension:g} N/m" if pretension else ""
+        more += "" if strength is None else f", strength {strength:g} N/m"
+        effects.append(f"bolt {index} from {ha} to {hb} ({stiffness:g} N/m{more})")
     return effects
 
 
