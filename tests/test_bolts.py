@@ -430,6 +430,42 @@ def test_checkpoint_resumes_bolts_with_the_same_numbers(tmp_path):
     assert tail.bolt_force(1)[-1] > 0
 
 
+# ---------------------------------------------------------------------- VTU
+def test_the_vtu_series_carries_bolts_as_lines(tmp_path):
+    """Every frame has the bolts as line cells (kind 2) from end a to end b with their force
+    and state; a scene without bolts gets no bolt fields."""
+    import meshio
+
+    from dda.io import VTUWriter
+
+    scene = _two_bolt_scene()
+    writer = VTUWriter(tmp_path / "bolted")
+    sim = dda.Simulation(scene, dt=1e-3, solver=NewtonRaphson(), output=writer)
+    result = sim.run(0.05)
+    files = writer.files
+    assert len(files) == len(result.time)
+    for k in (0, len(files) - 1):
+        mesh = meshio.read(files[k])
+        (i,) = [j for j, c in enumerate(mesh.cells) if c.type == "line"]
+        lines = mesh.cells[i].data
+        assert len(lines) == 2
+        np.testing.assert_allclose(mesh.points[lines][:, :, :2], sim.state.bolt_points
+                                   if k else sim.model.bolts.points, rtol=1e-12)
+        force = mesh.cell_data["bolt_force [N/m]"]
+        np.testing.assert_array_equal(force[i], [result.bolt_force(0)[k],
+                                                 result.bolt_force(1)[k]])
+        np.testing.assert_array_equal(mesh.cell_data["bolt_state"][i],
+                                      [result.bolt_broken(0)[k], result.bolt_broken(1)[k]])
+        np.testing.assert_array_equal(mesh.cell_data["kind"][i], [2, 2])
+        assert np.isnan(force[0]).all()  # the blocks
+    assert mesh.cell_data["bolt_state"][i].tolist() == [1, 0]  # bolt 0 broke
+    plain = tmp_path / "plain"
+    dda.Simulation(incline_scene(phi=PHI)[0], dt=1e-3, output=VTUWriter(plain)).run(0.002)
+    mesh = meshio.read(tmp_path / "plain_00000.vtu")
+    assert all(c.type != "line" for c in mesh.cells)
+    assert "bolt_force [N/m]" not in mesh.cell_data
+
+
 # ---------------------------------------------------------------------- bad input
 @pytest.fixture
 def two_blocks():
