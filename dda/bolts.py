@@ -30,10 +30,13 @@ step starts again from the bolts' exact geometry: the points are tracked as mate
 them, so nothing is lost to the linearization over many steps. ``f_bolt`` pulls ``a`` towards
 ``b`` under tension: ``f_a = N0 T_a^T n``, ``f_b = -N0 T_b^T n``.
 
-The term couples two blocks: its block pairs join the contacts' in the step's system
-(:attr:`dda.solvers.StepProblem.pair_blocks`), its 12 x 12 matrices and 12-vectors the
-contacts' (:meth:`BoltTerm.joined`), for a free block beside a known one the known block's
-increment goes to the right-hand side as for a contact.
+A bolt between two free blocks couples them: its block pair joins the contacts' in the
+step's system (:attr:`dda.solvers.StepProblem.pair_blocks`), its 12 x 12 matrix and 12-vector
+the contacts' (:meth:`BoltTerm.joined`). A bolt anchored in a block whose motion is known
+(fixed, shaken, moved) acts on its free block alone: its 6 x 6 part goes into that block's
+matrix and its forces, less the known end's increment times the coupling, into the block's
+forces (:meth:`BoltTable.system`), so the step keeps its layout and a small scene the
+compiled step of :mod:`dda.kernels.small_step` and the dense solvers' one-call kernels.
 
 Breaking: a bolt breaks when its force at the end of a step, from the moved points, exceeds
 its strength in tension (``N > strength``; compression is carried without limit). The step
@@ -52,7 +55,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda import geometry
-from dda.kernels.bolts import bolt_rows, moved_bolt_points
+from dda.kernels.bolts import bolt_rows, fold_anchored, moved_bolt_points
 from dda.kernels.pair_stiffness import PairStiffness
 
 __all__ = ["BoltTable", "BoltTerm", "bolt_energy", "bolt_label", "moved_points",
@@ -120,13 +123,11 @@ class BoltTable:
     def to_break(self, force: np.ndarray, broken: np.ndarray) -> int:
         """The bolt that breaks under ``force``: the most overloaded (largest
         ``N / strength`` above 1) of those not ``broken``, or -1 when none is."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = np.where(broken | ~np.isfinite(self.strength), 0.0,
-                             force / self.strength)
-        if not len(ratio):
+        over = (force > self.strength) & ~broken  # (an unbreakable bolt's strength: inf)
+        if not over.any():
             return -1
-        i = int(np.argmax(ratio))
-        return i if ratio[i] > 1.0 else -1
+        idx = np.flatnonzero(over)
+        return int(idx[np.argmax(force[idx] / self.strength[idx])])
 
     def term(self, points: np.ndarray, broken: np.ndarray,
              centroid: np.ndarray) -> BoltTerm | None:
@@ -147,6 +148,32 @@ class BoltTable:
                                      np.ascontiguousarray(centroid, dtype=np.float64),
                                      k, force)
         return BoltTerm(a, b, rows, weights, f, idx)
+
+    def system(self, points, broken, centroid, free, block_k, block_f, d_known):
+        """The step's bolts as the solvers take them: ``(block_k, block_f, coupled)``.
+
+        A bolt with one end on a block whose motion is known (an anchor) acts on one block's
+        unknowns only: its term is folded into that block's matrix and forces (new arrays;
+        the known end's increment ``d_known`` moved to the right-hand side),
+
+            K_ff += K_bolt,ff,     f_f += f_bolt,f - K_bolt,fk d_known,k,
+
+        so the step's system keeps its blocks' layout (and a small scene its compiled
+        step). The bolts between two free blocks couple them: ``coupled`` is their
+        :class:`BoltTerm` (None when there is none) for :attr:`dda.solvers.StepProblem.
+        bolts`. ``block_k`` and ``block_f`` are returned as given when no bolt is anchored.
+        """
+        term = self.term(points, broken, centroid)
+        if term is None:
+            return block_k, block_f, None
+        free = np.asarray(free, dtype=np.bool_)
+        if free[term.bj].all() and free[term.bk].all():
+            return block_k, block_f, term
+        k, f, coupled = fold_anchored(term.rows, term.weights, term.force, term.bj, term.bk,
+                                      free, np.ascontiguousarray(block_k, dtype=np.float64),
+                                      np.ascontiguousarray(block_f, dtype=np.float64),
+                                      np.ascontiguousarray(d_known, dtype=np.float64))
+        return k, f, term.subset(coupled)
 
     @property
     def _all(self) -> np.ndarray:
@@ -218,6 +245,15 @@ class BoltTerm:
 
     def __len__(self):
         return len(self.bj)
+
+    def subset(self, keep: np.ndarray) -> BoltTerm | None:
+        """The term of the bolts where ``keep`` (None when none is kept)."""
+        if not keep.any():
+            return None
+        if keep.all():
+            return self
+        return BoltTerm(self.bj[keep], self.bk[keep], self.rows[keep], self.weights[keep],
+                        self.force[keep], self.index[keep])
 
     def stiffness(self) -> np.ndarray:
         """(m, 12, 12) ``K_bolt = k r r^T + (N0 / L) s s^T``."""

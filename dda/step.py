@@ -226,13 +226,18 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     else:  # the known blocks stand still (the arrays are shared, never changed in place)
         known_u, known_v, shaking, known_du = state.known_u, None, state.shaking, _NO_MOVES
     d0 = search_distance(model, state, dt, carry, ints.centroid, known_du, search_hint, speed)
-    # the intact bolts' term (dda.bolts), None in a scene without bolts (or all broken)
-    bolts = (None if model.bolts is None
-             else model.bolts.term(state.bolt_points, state.bolt_broken, ints.centroid))
+    # the intact bolts (dda.bolts): the anchored ones in the blocks' system, the term of those
+    # between two free blocks (None in a scene without such bolts)
+    bolts, blocks_only = None, (k_eff, f_eff)
+    if model.bolts is not None:
+        k_eff, f_eff, bolts = model.bolts.system(state.bolt_points, state.bolt_broken,
+                                                 ints.centroid, model.free, k_eff, f_eff,
+                                                 d_known)
     if plain and carry and SMALL_STEP and bolts is None:
         done = _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_eff,
                            (known_u, known_v, d_known, shaking))
-        if done is not None:
+        # (a trial in which a bolt breaks is solved again by the composed path below)
+        if done is not None and (model.bolts is None or not _overloaded(model, state, done)):
             return done
     found = _detect(model, state, d0, settings.penetration_tolerance)
     element = _element(model, state, found, ints, dt if carry else 0.0)
@@ -242,8 +247,9 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
                           factors=_factors(solver), bolts=bolts)
     sol = solver.solve_step(problem)
     broken = state.bolt_broken
-    if bolts is not None and sol.converged:
-        sol, problem, broken = _break_bolts(model, state, solver, problem, sol, ints.centroid)
+    if model.bolts is not None and sol.converged:
+        sol, problem, broken = _break_bolts(model, state, solver, problem, sol, ints.centroid,
+                                            blocks_only)
     if element.shear_dashpot is not None and sol.contacts is not None:
         shear_dashpot_end(sol.contacts, *element.shear_dashpot)
     costs = (problem.pattern.unknowns, found.n_pairs)
@@ -275,11 +281,21 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     return trial, report
 
 
-def _break_bolts(model, state, solver, problem, sol, centroid):
+def _overloaded(model, state, done) -> bool:
+    """Whether a bolt of the small step's trial (``done``: trial and report) is above its
+    strength."""
+    trial = done[0]
+    if trial is None:
+        return False
+    return model.bolts.to_break(trial.bolt_forces(model), trial.bolt_broken) >= 0
+
+
+def _break_bolts(model, state, solver, problem, sol, centroid, blocks_only):
     """The step's solution once no intact bolt is above its strength at its end
     (:mod:`dda.bolts`: the most overloaded breaks and the step is solved again from its
-    start without it, until none is); ``(solution, problem, broken flags)``. The passes and
-    iterations of every solve are counted in the solution's."""
+    start without it, until none is); ``(solution, problem, broken flags)``. ``blocks_only``
+    is the blocks' effective system without the bolts. The passes and iterations of every
+    solve are counted in the solution's."""
     bolts = model.bolts
     broken = state.bolt_broken
     passes = iterations = 0
@@ -292,7 +308,9 @@ def _break_bolts(model, state, solver, problem, sol, centroid):
         broken[i] = True
         passes += sol.open_close_passes
         iterations += sol.iterations
-        problem = replace(problem, bolts=bolts.term(state.bolt_points, broken, centroid))
+        k, f, coupled = bolts.system(state.bolt_points, broken, centroid, model.free,
+                                     *blocks_only, problem.d_known)
+        problem = replace(problem, block_k=k, block_f=f, bolts=coupled)
         sol = solver.solve_step(problem)
     sol.open_close_passes += passes
     sol.iterations += iterations

@@ -8,7 +8,7 @@ import pytest
 
 import dda
 import dda.step as step_module
-from dda.bolts import BoltTerm, moved_points
+from dda.bolts import BoltTable, BoltTerm, moved_points
 from dda.contact import CoulombSingle, JointMaterial
 from dda.contact.tangent import _TANGENT_TERMS, SPRING_TERMS
 from dda.effects import TimeTable
@@ -205,6 +205,33 @@ def test_bolt_breaks_where_its_force_would_exceed_the_strength(solver):
     assert accel == pytest.approx(expected, rel=1e-6)
 
 
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_a_break_lives_in_the_trial_state(solver):
+    """The step in which a bolt breaks changes none of its inputs: the broken flag is the
+    trial's, stepping again gives the same trial, and a refused step breaks nothing."""
+    import copy
+
+    from dda.step import StepSettings, step
+    from tests.test_pure_step import _same
+
+    scene, top, t = bolted_incline(0.0, stiffness=1e6, strength=0.5 * held_tension(0.0))
+    sim = dda.Simulation(scene, dt=1e-3, solver=solver)
+    sim.run(0.026)  # the bolt breaks in step 27
+    state = sim.committed
+    assert not state.bolt_broken.any()
+    before = copy.deepcopy(state)
+    trial, report = step(sim.model, state, 1e-3, solver)
+    assert report.converged and trial.bolt_broken.tolist() == [True]
+    assert trial.bolt_forces(sim.model).tolist() == [0.0]
+    _same(vars(state), vars(before))
+    again, _ = step(sim.model, state, 1e-3, solver)
+    _same(vars(again), vars(trial))
+    refused, report = step(sim.model, state, 1e-3, solver,
+                           StepSettings(max_displacement_ratio=1e-12))
+    assert refused is None
+    _same(vars(state), vars(before))
+
+
 def _series(strengths):
     """A block hung from a middle block, hung from a fixed roof: two bolts in series, 1e6
     N/m each; the static analysis at dt 0.1 s takes the blocks most of the way to their
@@ -278,6 +305,41 @@ def test_a_bolt_to_a_moved_block_follows_its_motion():
     weight = 2500.0 * 0.25 * G
     assert result.bolt_force(0)[-1] == pytest.approx(weight, rel=1e-6)
     assert result.displacement(low)[-1, 1] == pytest.approx(0.1 - weight / k, rel=1e-6)
+
+
+def _moved_roof_scene():
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=G)
+    roof = scene.add_block(box(0, 2, 1, 0.5), rock, name="roof")
+    low = scene.add_block(box(0.25, 1.0, 0.5, 0.5), rock, name="low")
+    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                                  friction=CoulombSingle(phi=30.0)))
+    scene.prescribe_motion(roof, TimeTable([0.0, 0.5, 10.0], x=[0.0, 0.02, 0.02],
+                                           y=[0.0, 0.1, 0.1]))
+    scene.add_bolt(low, (0.4, 1.25), roof, (0.6, 2.25), stiffness=1e6, pretension=500.0)
+    return scene
+
+
+@pytest.mark.parametrize("make", [lambda: bolted_incline(20.0, stiffness=1e8)[0],
+                                  _moved_roof_scene], ids=["fixed anchor", "moved anchor"])
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_anchored_bolts_fold_into_their_block_as_the_coupling_would(make, solver,
+                                                                    monkeypatch):
+    """A bolt anchored in a known block, folded into its free block's matrix and forces
+    (dda.kernels.bolts.fold_anchored), runs as the same bolt coupled through the system's
+    pattern with the known block's increment on the right-hand side."""
+    runs = []
+    for fold in (True, False):
+        if not fold:
+            monkeypatch.setattr(BoltTable, "system",
+                                lambda self, points, broken, centroid, free, k, f, dk:
+                                (k, f, self.term(points, broken, centroid)))
+        sim = dda.Simulation(make(), dt=1e-3, solver=type(solver)())
+        runs.append((sim.run(0.1), sim.state))
+    (folded, a), (coupled, b) = runs
+    np.testing.assert_allclose(folded.bolt_force(0), coupled.bolt_force(0), rtol=1e-7,
+                               atol=1e-9 * np.abs(coupled.bolt_force(0)).max())
+    np.testing.assert_allclose(a.x, b.x, rtol=0, atol=1e-10)
 
 
 def test_bolt_energy_is_its_elastic_energy():
@@ -556,19 +618,32 @@ def test_a_scene_without_bolts_runs_as_before(solver, analysis, monkeypatch):
     assert (len(taken) > 40) == (analysis == "dynamic")  # the small step where it was
 
 
-def test_a_bolted_scene_takes_the_compiled_step_once_its_bolts_are_broken(monkeypatch):
-    """The compiled small step and dense kernels know no bolts: a scene with an intact bolt
-    goes the composed way; once every bolt is broken it has none to add."""
+def test_which_bolted_scenes_take_the_compiled_step(monkeypatch):
+    """A bolt anchored in a fixed block is folded into its free block's matrix and forces:
+    the scene keeps the compiled small step. A bolt between two free blocks couples them,
+    which the compiled step does not know: the composed step takes the scene, until that
+    bolt breaks."""
     taken = []
     monkeypatch.setattr(step_module, "contact_step",
                         lambda *args: taken.append(1) or small_step.contact_step(*args))
-    scene, top, _ = bolted_incline(0.0, stiffness=1e6)
-    dda.Simulation(scene, dt=1e-3).run(0.05)
-    assert taken == []
-    scene, top, _ = bolted_incline(0.0, stiffness=1e6, strength=0.5 * held_tension(0.0))
+    scene, top, t = bolted_incline(0.0, stiffness=1e8)
     result = dda.Simulation(scene, dt=1e-3).run(0.05)
-    broken_at = int(np.flatnonzero(result.bolt_broken(0))[0])
-    assert len(taken) >= len(result.time) - broken_at - 2
+    assert len(taken) >= 0.8 * len(result.stats)
+    n = np.array([-t[1], t[0]])
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    p0 = 1.9 * t
+    low = scene.add_block([p0, p0 + 0.5 * t, p0 + 0.5 * t + 0.5 * n, p0 + 0.5 * n], rock,
+                          name="low")
+    scene.add_bolt(low, p0 + 0.25 * t + 0.25 * n, top, 2.75 * t + 0.25 * n, stiffness=1e6,
+                   strength=300.0)
+    sim = dda.Simulation(scene, dt=1e-3)
+    taken.clear()
+    sim.run(0.005)
+    assert taken == [] and not sim.state.bolt_broken[1]
+    result = sim.run(0.1)
+    broken_at = int(np.flatnonzero(result.bolt_broken(1))[0])
+    assert not result.bolt_broken(0).any()
+    assert len(taken) >= 0.8 * (len(result.stats) - broken_at)
 
 
 def test_points_move_with_their_blocks():

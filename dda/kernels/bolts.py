@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["bolt_rows", "moved_bolt_points"]
+__all__ = ["bolt_rows", "fold_anchored", "moved_bolt_points"]
 
 
 @njit(cache=True)
@@ -78,3 +78,43 @@ def moved_bolt_points(points, blocks, centroid, d):
             out[i, j, 0] = points[i, j, 0] + u
             out[i, j, 1] = points[i, j, 1] + v
     return out
+
+
+@njit(cache=True)
+def fold_anchored(rows, weights, force, bj, bk, free, block_k, block_f, d_known):
+    """``(block_k, block_f, coupled)``: copies of the blocks' matrices and forces with the
+    bolts that have one free end folded into that end's block,
+
+        K_ff += w0 r_f r_f^T + w1 s_f s_f^T,
+        f_f += f_bolt,f - (w0 r_f (r_k . d_k) + w1 s_f (s_k . d_k)),
+
+    (``f``: the free end's six entries of a bolt's rows, ``k``: the known end's, ``d_k`` its
+    known increment), and (m,) bool, the bolts between two free blocks (the rest: both ends
+    known, which a scene refuses)."""
+    k = block_k.copy()
+    f = block_f.copy()
+    m = rows.shape[0]
+    coupled = np.zeros(m, dtype=np.bool_)
+    for i in range(m):
+        fa, fb = free[bj[i]], free[bk[i]]
+        if fa and fb:
+            coupled[i] = True
+            continue
+        if not (fa or fb):
+            continue
+        own, other = (0, 6) if fa else (6, 0)
+        blk = bj[i] if fa else bk[i]
+        known = bk[i] if fa else bj[i]
+        for j in range(2):
+            w = weights[i, j]
+            proj = 0.0
+            for c in range(6):
+                proj += rows[i, j, other + c] * d_known[known, c]
+            for p in range(6):
+                rp = rows[i, j, own + p]
+                f[blk, p] -= w * rp * proj
+                for q in range(6):
+                    k[blk, p, q] += w * rp * rows[i, j, own + q]
+        for p in range(6):
+            f[blk, p] += force[i, own + p]
+    return k, f, coupled
