@@ -67,22 +67,28 @@ class StepProblem:
         """The assembly's index work for this step's blocks and contacts (built once, and
         kept for the next step when its blocks and contacts are the same)."""
         with section("assembly"):
-            args = (self.free, *self.pair_blocks, self.rigid)
+            el = self.element
+            args = ((self.free, el.bj, el.bk, self.rigid) if self.bolts is None
+                    else (self.free, *self.pair_blocks, self.rigid))
             if self.factors is None:
                 return SystemPattern(*args)
             return self.factors.kept("pattern", args,
                                      lambda: SystemPattern(*args, cache=self.factors))
 
 
-    @cached_property
+    @property
     def pair_blocks(self) -> tuple[np.ndarray, np.ndarray]:
         """``(bj, bk)``: the two blocks of every coupling term of the system, the contacts'
         and then the bolts'."""
         el = self.element
         if self.bolts is None:
             return el.bj, el.bk
-        return (np.concatenate([np.asarray(el.bj, dtype=np.int64), self.bolts.bj]),
+        kept = self.__dict__.get("_pair_blocks")
+        if kept is None:
+            kept = self.__dict__["_pair_blocks"] = (
+                np.concatenate([np.asarray(el.bj, dtype=np.int64), self.bolts.bj]),
                 np.concatenate([np.asarray(el.bk, dtype=np.int64), self.bolts.bk]))
+        return kept
 
     def with_bolts(self, pair_k, pair_f):
         """The contacts' stiffness and forces on ``[d_j; d_k]`` with the bolts' appended
