@@ -3,8 +3,10 @@
 The step builds its problem from the committed :class:`StepState` alone (METHOD.md sections 1
 to 5): the block system (stiffness, Newmark inertia, loads, constraint springs), the known
 motion of fixed, shaken and moved blocks, contact detection with the committed contacts
-carried over, the contact element; a :class:`dda.solvers.NonlinearSolver` solves it. The trial
-is then accepted or refused by three checks, and a refused trial is simply dropped:
+carried over, the contact element, the intact bolts (:mod:`dda.bolts`; a bolt above its
+strength at the end breaks and the step is solved again without it); a
+:class:`dda.solvers.NonlinearSolver` solves it. The trial is then accepted or refused by
+three checks, and a refused trial is simply dropped:
 
 - no vertex may move farther than half the contact search distance (two blocks closing on
   each other close their gap by twice the largest move; beyond it a contact may be missed);
@@ -230,9 +232,10 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     # between two free blocks (None in a scene without such bolts)
     bolts, blocks_only = None, (k_eff, f_eff)
     if model.bolts is not None:
-        k_eff, f_eff, bolts = model.bolts.system(state.bolt_points, state.bolt_broken,
-                                                 ints.centroid, model.free, k_eff, f_eff,
-                                                 d_known)
+        with section("assembly"):
+            k_eff, f_eff, bolts = model.bolts.system(state.bolt_points, state.bolt_broken,
+                                                     ints.centroid, model.free, k_eff, f_eff,
+                                                     d_known)
     if plain and carry and SMALL_STEP and bolts is None:
         done = _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_eff,
                            (known_u, known_v, d_known, shaking))

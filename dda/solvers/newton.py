@@ -3,10 +3,12 @@
 After the OPEN-CLOSE iteration has found the contact states, Newton iterations solve the
 nonlinear balance of the step
 
-    R(d) = K~ d - F~ + sum_c [t_n E^T + t_s I^T](d) = 0
+    R(d) = K~ d - F~ + sum_c [t_n E^T + t_s I^T](d) + sum_b [K_b d - f_b] = 0
 
-with the contact forces evaluated exactly at every trial state (gaps from the moved geometry,
-shear force from the friction law's return map built from the committed history) and the
+(the last sum: the bolts between two free blocks, linear in the step, :mod:`dda.bolts`; an
+anchored bolt is in ``K~`` and ``F~``) with the contact forces evaluated exactly at every
+trial state (gaps from the moved geometry, shear force from the friction law's return map
+built from the committed history) and the
 consistent tangent of :meth:`dda.contact.ContactElement.response` (geometric terms and the
 unsymmetric slip coupling included), until the out-of-balance force is below ``tol`` times the
 size of the forces in play (or has reached the round-off floor of a stiff penalty system:
