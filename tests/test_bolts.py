@@ -342,6 +342,34 @@ def test_anchored_bolts_fold_into_their_block_as_the_coupling_would(make, solver
     np.testing.assert_allclose(a.x, b.x, rtol=0, atol=1e-10)
 
 
+@pytest.mark.parametrize("strength", [None, 150.0], ids=["holds", "breaks"])
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_a_bolt_to_a_shaken_table_in_the_compiled_step(solver, strength, monkeypatch):
+    """A block bolted to a shaken table (the anchor's increment folded into the block's
+    forces) runs the same in the compiled small step as in the composed one, to the bit; a
+    bolt that breaks does so in the same step either way (the compiled step's trial goes to
+    the composed one)."""
+    from tests.conftest import shaken_block_scene
+
+    taken = []
+    monkeypatch.setattr(step_module, "contact_step",
+                        lambda *args: taken.append(1) or small_step.contact_step(*args))
+    runs = []
+    for small in (True, False):
+        monkeypatch.setattr(step_module, "SMALL_STEP", small)
+        scene, table, top = shaken_block_scene(phi=20, amplitude=6.0)
+        scene.add_bolt(top, (1.0, 0.3), table, (1.5, 0.1), stiffness=1e6, strength=strength)
+        sim = dda.Simulation(scene, dt=1e-3, solver=type(solver)())
+        runs.append((sim.run(0.3), sim.state))
+    (fast, a), (slow, b) = runs
+    assert len(taken) > 0.5 * len(fast.stats)
+    np.testing.assert_array_equal(a.x, b.x)
+    np.testing.assert_array_equal(fast.bolt_force(0), slow.bolt_force(0))
+    np.testing.assert_array_equal(fast.bolt_broken(0), slow.bolt_broken(0))
+    assert fast.bolt_broken(0)[-1] == (strength is not None)
+    assert np.abs(fast.bolt_force(0)).max() > 100.0
+
+
 def test_bolt_energy_is_its_elastic_energy():
     """A pretensioned bolt holds N^2 / (2 k) of energy from the start (dda.energy)."""
     scene, top, t = bolted_incline(20.0, stiffness=1e7)

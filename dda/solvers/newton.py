@@ -352,8 +352,9 @@ def _residuals(problem, d, pair_r):
     ``K_b d - f_b`` (every block), and of the free blocks only the total out-of-balance
     ``r``, the blocks' ``K_b d`` and the contacts' summed ``|r_c|`` (the last two measure the
     forces |r| is judged against)."""
-    free = problem.free
-    bj, bk = problem.pair_blocks  # the contacts' (and the bolts') blocks of pair_r's rows
+    free, el = problem.free, problem.element
+    # the blocks of pair_r's rows: the contacts' (and after them the bolts')
+    bj, bk = (el.bj, el.bk) if getattr(problem, "bolts", None) is None else problem.pair_blocks
     if RESIDUAL_KERNEL:
         with section("assembly"):
             rigid = problem.rigid if problem.rigid is not None else np.zeros(len(free), bool)
