@@ -6,6 +6,7 @@ The energy of the blocks (METHOD.md section 1) and of the contact springs (secti
     potential  rho g A y_c per block (from y = 0)
     strain     0.5 A sigma^T D^-1 sigma per block
     contact    0.5 t_n^2 / p_n + 0.5 t_s^2 / p_s per closed contact
+    bolt       0.5 N^2 / k per intact bolt (:mod:`dda.bolts`; a break releases it)
 
 Friction and Newmark's gamma = 1 only take energy out, so a run without loads, shaking or
 prescribed motion must never end with more than it started with (``tests/stability``).
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda import geometry
+from dda.bolts import bolt_energy
 from dda.contact.contacts import OPEN
 
 __all__ = ["Energy", "energy"]
@@ -31,10 +33,11 @@ class Energy:
     potential: float
     strain: float
     contact: float
+    bolt: float = 0.0
 
     @property
     def total(self) -> float:
-        return self.kinetic + self.potential + self.strain + self.contact
+        return self.kinetic + self.potential + self.strain + self.contact + self.bolt
 
 
 def energy(sim, state=None) -> Energy:
@@ -77,4 +80,5 @@ def energy(sim, state=None) -> Energy:
         joint = model.joint_index(c.bj[closed], c.bk[closed])
         contact = 0.5 * float(np.sum(c.t_n[closed] ** 2 / model.joints.normal_penalty[joint]
                                      + c.t_s[closed] ** 2 / model.joints.shear_penalty[joint]))
-    return Energy(kinetic, potential, strain, contact)
+    bolt = bolt_energy(model.bolts, st.bolt_points, st.bolt_broken)
+    return Energy(kinetic, potential, strain, contact, bolt)

@@ -13,6 +13,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from dda import geometry
+from dda.bolts import BoltTable
 from dda.contact.contacts import ContactSet, pair_key
 from dda.contact.dashpot import damping_ratio
 from dda.contact.detection import Memo, VertexTopology
@@ -133,6 +134,7 @@ class Model:
     load_initial, load_block, load_constant, load_varying : point loads as arrays
     spring_initial, spring_block, spring_motion, spring_mask, spring_penalty : the penalty
         springs of partial constraints, one per material point
+    bolts : :class:`dda.bolts.BoltTable` of the scene's bolts, or None without any
 
     Examples
     --------
@@ -188,11 +190,14 @@ class Model:
         self.joints = JointTable.from_scene(scene, nb)
         self._compile_loads(scene.point_loads)
         self._compile_springs(x0)
+        # the bolts (dda.bolts), None in a scene without any
+        self.bolts = BoltTable.from_scene(scene, self.free)
         # what a step derives from the contacts' block pairs alone, kept while they stay
         self.memo = Memo(size=2)
 
     def __setstate__(self, state):
         self.__dict__.update(state)
+        self.__dict__.setdefault("bolts", None)  # a model pickled before bolts were
         # a model pickled before these were kept (a checkpoint of an earlier version)
         if "memo" not in state:
             self.min_size = float(np.min(self.size))

@@ -43,7 +43,16 @@ def frame(model, state) -> Frame:
         contact_state=c.state[closed].astype(np.int64),
         block_names=tuple(b.name for b in model.scene.blocks),
         shaken=np.array([s.block for s in model.shakes], dtype=np.int64),
+        **_bolt_fields(model, state),
     )
+
+
+def _bolt_fields(model, state) -> dict:
+    """The bolts' fields of a :class:`dda.result.Frame` (none in a scene without bolts)."""
+    if model.bolts is None:
+        return {}
+    return {"bolt_points": state.bolt_points.copy(), "bolt_force": state.bolt_forces(model),
+            "bolt_broken": state.bolt_broken.copy()}
 
 
 def pair_forces(model, state):
@@ -96,6 +105,8 @@ class Recorder:
         # the result needs block centroids only; a full Frame is built when a writer asks
         self.result.record(state.time, state.centroid - self.model.centroid_initial,
                            state.rotation, state.velocity, state.stress, keys, f, n)
+        if self.model.bolts is not None:
+            self.result.record_bolts(state.bolt_forces(self.model), state.bolt_broken)
         writer = self.writer
         if writer is None:
             return

@@ -40,6 +40,10 @@ class Frame:
     contact_state: np.ndarray
     block_names: tuple = ()
     shaken: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    # the bolts (dda.bolts): (n, 2, 2) ends, (n,) axial force (tension positive), broken
+    bolt_points: np.ndarray | None = None
+    bolt_force: np.ndarray | None = None
+    bolt_broken: np.ndarray | None = None
 
 
 class StepStats:
@@ -305,6 +309,7 @@ class Result:
         self._pairs: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
         self.stats = StepStats(timing_every=record_every)
         self.frames_written = 0
+        self._bolt_rows: list[tuple[np.ndarray, np.ndarray]] = []  # per record, with bolts
 
     # ---------------------------------------------------------------- recording
     def record(self, time, displacement, rotation, velocity, stress, pair_keys, pair_force,
@@ -364,6 +369,26 @@ class Result:
             if pos < len(keys) and keys[pos] == key:
                 force[i], normal[i] = f[pos], n[pos]
         return _normal_and_shear(force, normal)
+
+    def record_bolts(self, force, broken):
+        """Keep the bolts' (n_bolts,) axial forces and broken flags of the step just
+        recorded (:meth:`record`; a scene with bolts records them at every step)."""
+        self._bolt_rows.append((np.array(force, dtype=float), np.array(broken, dtype=bool)))
+
+    def _bolt_column(self, i, column) -> np.ndarray:
+        n = len(self._scene.bolts)
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < n:
+            raise ValueError(f"no bolt {i!r} (the scene has {n})")
+        return np.array([row[column][int(i)] for row in self._bolt_rows])
+
+    def bolt_force(self, i) -> np.ndarray:
+        """(n,) axial force of bolt ``i`` (N per m of thickness), tension positive, at the
+        recorded steps; 0 once it has broken."""
+        return self._bolt_column(i, 0).astype(float).reshape(-1)
+
+    def bolt_broken(self, i) -> np.ndarray:
+        """(n,) bool, whether bolt ``i`` has broken by each recorded step."""
+        return self._bolt_column(i, 1).astype(bool).reshape(-1)
 
     @property
     def scene(self):

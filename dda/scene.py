@@ -8,6 +8,7 @@ import numpy as np
 
 from dda import geometry
 from dda._checks import finite_number, finite_vector
+from dda.bolts import bolt_label, outside_distance
 from dda.contact.detection import overlap_depths
 from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
@@ -78,6 +79,17 @@ class _Shake:
 
 
 @dataclass
+class _Bolt:
+    block_a: int
+    point_a: np.ndarray
+    block_b: int
+    point_b: np.ndarray
+    stiffness: float
+    pretension: float
+    strength: float | None
+
+
+@dataclass
 class _Damping:
     blocks: tuple[int, ...] | None  # None: every block
     mass: float
@@ -127,6 +139,7 @@ class Scene:
         self._shakes: list[_Shake] = []
         self._joints = _Joints()
         self._damping: list[_Damping] = []
+        self._bolts: list[_Bolt] = []
 
     # ------------------------------------------------------------------ blocks
     @property
@@ -340,6 +353,84 @@ class Scene:
         p = finite_vector("point", point, where=f"point load on {h}")
         self._loads.append(_PointLoad(h.index, p, LoadHistory(force, name=f"point load on {h}")))
 
+    def add_bolt(self, block_a, point_a, block_b, point_b, stiffness: float,
+                 pretension: float = 0.0, strength: float | None = None) -> int:
+        """Bolt two blocks together: an axial spring between a material point of each.
+
+        The bolt's force, tension positive, is ``N = pretension + stiffness (L - L0)`` with
+        ``L`` the distance between its two points and ``L0`` that at the start: the
+        pretension acts from the start. It enters every step's system like the contacts
+        (:mod:`dda.bolts` has the terms). A bolt whose force would exceed ``strength`` breaks
+        in that step (the step is solved again without it) and stays broken.
+
+        Parameters
+        ----------
+        block_a, block_b : Block, name or index
+            Two different blocks; one of them may be fixed (an anchor in stable rock), not
+            both.
+        point_a, point_b : (x, y)
+            The bolt's ends at the start, inside (or on the boundary of) block_a and
+            block_b; they then move with their blocks. They must not coincide.
+        stiffness : float
+            Axial stiffness ``k`` (N/m per m of thickness), positive: ``E A / L`` of the
+            tendon for a bolt of cross-section ``A`` per m.
+        pretension : float
+            Tension at the start (N per m), zero or positive.
+        strength : float, optional
+            Tensile force (N per m) above which the bolt breaks; None: it never breaks.
+            Positive, and not below the pretension.
+
+        Returns
+        -------
+        int
+            The bolt's index ``i`` (``result.bolt_force(i)``).
+
+        Examples
+        --------
+        >>> import dda
+        >>> from dda.materials import LinearElastic
+        >>> rock = LinearElastic(young=1e9, poisson=0.2, density=2000.0)
+        >>> scene = dda.Scene(gravity=9.81)
+        >>> base = scene.add_block([(0, 0), (2, 0), (2, 1), (0, 1)], rock, fixed=True)
+        >>> top = scene.add_block([(0.5, 1), (1.5, 1), (1.5, 2), (0.5, 2)], rock)
+        >>> scene.add_bolt(top, (1.0, 1.8), base, (1.0, 0.2), stiffness=1e7, pretension=5e3)
+        0
+        >>> scene.add_bolt(top, (1.0, 2.5), base, (1.0, 0.2), stiffness=1e7)  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        ValueError: bolt 1 (...): point_a (1, 2.5) is outside block 'block1', 0.5 m from it
+        """
+        a, b = self.block(block_a), self.block(block_b)
+        i = len(self._bolts)
+        where = bolt_label(i, a, b)
+        if a == b:
+            raise ValueError(f"{where}: block_a and block_b are the same block; a bolt joins "
+                             "two blocks")
+        ends = []
+        for name, h, point in (("point_a", a, point_a), ("point_b", b, point_b)):
+            p = finite_vector(name, point, where=where)
+            verts = self._blocks[h.index].vertices
+            size = float(np.ptp(verts, axis=0).max())
+            out = outside_distance(verts, p)
+            if out > 1e-9 * size:
+                raise ValueError(f"{where}: {name} ({p[0]:g}, {p[1]:g}) is outside {h}, "
+                                 f"{out:.3g} m from it")
+            ends.append(p)
+        if np.hypot(*(ends[1] - ends[0])) == 0.0:
+            raise ValueError(f"{where}: point_a and point_b coincide; a bolt needs a length")
+        if self._blocks[a.index].fixed and self._blocks[b.index].fixed:
+            raise ValueError(f"{where}: both blocks are fixed; a bolt needs a block that can "
+                             "move")
+        k = finite_number("stiffness", stiffness, positive=True, where=where)
+        p0 = finite_number("pretension", pretension, nonnegative=True, where=where)
+        if strength is not None:
+            strength = finite_number("strength", strength, positive=True, where=where)
+            if strength < p0:
+                raise ValueError(f"{where}: the pretension {p0:g} N/m exceeds the strength "
+                                 f"{strength:g} N/m")
+        self._bolts.append(_Bolt(a.index, ends[0], b.index, ends[1], k, p0, strength))
+        return i
+
     def set_damping(self, mass: float = 0.0, stiffness: float = 0.0, blocks=None) -> None:
         """Viscous (Rayleigh) damping of blocks, ``C = mass * M + stiffness * K_e``.
 
@@ -455,6 +546,12 @@ class Scene:
         return tuple(self._loads)
 
     @property
+    def bolts(self) -> tuple:
+        """The bolts (:meth:`add_bolt`): blocks, points at the start, stiffness, pretension,
+        strength (None: unbreakable), in the order they were added."""
+        return tuple(self._bolts)
+
+    @property
     def damping_settings(self) -> tuple:
         """The :meth:`set_damping` calls in order: blocks (None: all), mass, stiffness."""
         return tuple(self._damping)
@@ -533,4 +630,6 @@ class Scene:
             effects.append(f"{len(self._loads)} point loads")
         if any(d.mass or d.stiffness for d in self._damping):
             effects.append("damping")
+        if self._bolts:
+            effects.append(f"{len(self._bolts)} bolts")
         return f"Scene({len(self._blocks)} blocks{', ' if effects else ''}{', '.join(effects)})"

@@ -3,8 +3,10 @@
 The step builds its problem from the committed :class:`StepState` alone (METHOD.md sections 1
 to 5): the block system (stiffness, Newmark inertia, loads, constraint springs), the known
 motion of fixed, shaken and moved blocks, contact detection with the committed contacts
-carried over, the contact element; a :class:`dda.solvers.NonlinearSolver` solves it. The trial
-is then accepted or refused by three checks, and a refused trial is simply dropped:
+carried over, the contact element, the intact bolts (:mod:`dda.bolts`; a bolt above its
+strength at the end breaks and the step is solved again without it); a
+:class:`dda.solvers.NonlinearSolver` solves it. The trial is then accepted or refused by
+three checks, and a refused trial is simply dropped:
 
 - no vertex may move farther than half the contact search distance (two blocks closing on
   each other close their gap by twice the largest move; beyond it a contact may be missed);
@@ -18,7 +20,7 @@ search, stop).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -78,6 +80,8 @@ COMPILED_ELEMENT = True
 SMALL_STEP = True
 
 _NO_MOVES = np.zeros((0, 2))
+_NO_BOLT_POINTS = np.zeros((0, 2, 2))
+_NO_BOLTS_BROKEN = np.zeros(0, dtype=bool)
 
 # the search distance is this multiple of the step's predicted largest vertex displacement
 SEARCH_FACTOR = 2.5
@@ -112,6 +116,8 @@ class StepState:
     last_move : the largest vertex displacement of the last step (m)
     untracked : the deepest untracked penetration left in this state, in tolerances
     penetration : the deepest vertex inside another block, tracked or not (m)
+    bolt_points : (n_bolts, 2, 2) where the bolts' two material points are now
+    bolt_broken : (n_bolts,) bool, the bolts that have broken
     """
 
     time: float
@@ -128,17 +134,30 @@ class StepState:
     last_move: float = 0.0
     untracked: float = 0.0
     penetration: float = 0.0
+    bolt_points: np.ndarray = field(default_factory=lambda: _NO_BOLT_POINTS)
+    bolt_broken: np.ndarray = field(default_factory=lambda: _NO_BOLTS_BROKEN)
 
     @classmethod
     def initial(cls, model: Model) -> StepState:
         """The state a run of ``model`` starts from."""
         nb = model.n_blocks
+        bolts = {}
+        if model.bolts is not None:
+            bolts = {"bolt_points": model.bolts.points.copy(),
+                     "bolt_broken": np.zeros(len(model.bolts), dtype=bool)}
         return cls(time=0.0, x=model.x_initial.copy(), velocity=model.initial_velocity(),
                    stress=np.zeros((nb, 3)), rotation=np.zeros(nb),
                    centroid=model.centroid_initial.copy(), contacts=model.initial_contacts(),
                    load_points=model.load_initial.copy(),
                    spring_points=model.spring_initial.copy(), known_u=np.zeros((nb, 2)),
-                   shaking=tuple(s.history.initial() for s in model.shakes))
+                   shaking=tuple(s.history.initial() for s in model.shakes), **bolts)
+
+    def bolt_forces(self, model: Model) -> np.ndarray:
+        """(n_bolts,) the bolts' axial forces in this state (N per m, tension positive; 0
+        for a broken one)."""
+        if model.bolts is None:
+            return np.zeros(0)
+        return model.bolts.forces(self.bolt_points, self.bolt_broken)
 
 
 @dataclass(frozen=True)
@@ -209,18 +228,31 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     else:  # the known blocks stand still (the arrays are shared, never changed in place)
         known_u, known_v, shaking, known_du = state.known_u, None, state.shaking, _NO_MOVES
     d0 = search_distance(model, state, dt, carry, ints.centroid, known_du, search_hint, speed)
-    if plain and carry and SMALL_STEP:
+    # the intact bolts (dda.bolts): the anchored ones in the blocks' system, the term of those
+    # between two free blocks (None in a scene without such bolts)
+    bolts, blocks_only = None, (k_eff, f_eff)
+    if model.bolts is not None:
+        with section("assembly"):
+            k_eff, f_eff, bolts = model.bolts.system(state.bolt_points, state.bolt_broken,
+                                                     ints.centroid, model.free, k_eff, f_eff,
+                                                     d_known)
+    if plain and carry and SMALL_STEP and bolts is None:
         done = _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_eff,
                            (known_u, known_v, d_known, shaking))
-        if done is not None:
+        # (a trial in which a bolt breaks is solved again by the composed path below)
+        if done is not None and (model.bolts is None or not _overloaded(model, state, done)):
             return done
     found = _detect(model, state, d0, settings.penetration_tolerance)
     element = _element(model, state, found, ints, dt if carry else 0.0)
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
                           d_known=d_known, element=element,
                           max_open_close=settings.max_open_close, rigid=model.rigid,
-                          factors=_factors(solver))
+                          factors=_factors(solver), bolts=bolts)
     sol = solver.solve_step(problem)
+    broken = state.bolt_broken
+    if model.bolts is not None and sol.converged:
+        sol, problem, broken = _break_bolts(model, state, solver, problem, sol, ints.centroid,
+                                            blocks_only)
     if element.shear_dashpot is not None and sol.contacts is not None:
         shear_dashpot_end(sol.contacts, *element.shear_dashpot)
     costs = (problem.pattern.unknowns, found.n_pairs)
@@ -248,8 +280,44 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
     if guard.reason:
         return None, report
     trial = _advanced(model, state, dt, sol, ints.centroid, ended, v_eff,
-                      (known_u, known_v, d_known, shaking), guard)
+                      (known_u, known_v, d_known, shaking), guard, broken)
     return trial, report
+
+
+def _overloaded(model, state, done) -> bool:
+    """Whether a bolt of the small step's trial (``done``: trial and report) is above its
+    strength."""
+    trial = done[0]
+    if trial is None:
+        return False
+    return model.bolts.to_break(trial.bolt_forces(model), trial.bolt_broken) >= 0
+
+
+def _break_bolts(model, state, solver, problem, sol, centroid, blocks_only):
+    """The step's solution once no intact bolt is above its strength at its end
+    (:mod:`dda.bolts`: the most overloaded breaks and the step is solved again from its
+    start without it, until none is); ``(solution, problem, broken flags)``. ``blocks_only``
+    is the blocks' effective system without the bolts. The passes and iterations of every
+    solve are counted in the solution's."""
+    bolts = model.bolts
+    broken = state.bolt_broken
+    passes = iterations = 0
+    while sol.converged:
+        ends = bolts.moved(state.bolt_points, centroid, sol.d)
+        i = bolts.to_break(bolts.forces(ends, broken), broken)
+        if i < 0:
+            break
+        broken = broken.copy()
+        broken[i] = True
+        passes += sol.open_close_passes
+        iterations += sol.iterations
+        k, f, coupled = bolts.system(state.bolt_points, broken, centroid, model.free,
+                                     *blocks_only, problem.d_known)
+        problem = replace(problem, block_k=k, block_f=f, bolts=coupled)
+        sol = solver.solve_step(problem)
+    sol.open_close_passes += passes
+    sol.iterations += iterations
+    return sol, problem, broken
 
 
 def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_eff, known):
@@ -587,7 +655,7 @@ def _refusal(model, ended: _Ended, d0, max_ratio):
 
 
 def _advanced(model, state, dt, sol, centroid, ended: _Ended, v_eff, known,
-              guard) -> StepState:
+              guard, bolt_broken=None) -> StepState:
     """The trial state at the end of an accepted step (Newmark update, METHOD.md s. 2)."""
     known_u, known_v, d_known, shaking = known
     d = sol.d
@@ -614,6 +682,9 @@ def _advanced(model, state, dt, sol, centroid, ended: _Ended, v_eff, known,
     if len(model.spring_block):
         spring_points = spring_points + geometry.vertex_displacements(
             spring_points, centroid[model.spring_block], d[model.spring_block])
+    bolt_points = state.bolt_points
+    if model.bolts is not None:
+        bolt_points = model.bolts.moved(bolt_points, centroid, d)
     return StepState(
         time=state.time + dt, x=ended.x_new, velocity=vel, stress=stress,
         rotation=rotation,
@@ -621,6 +692,8 @@ def _advanced(model, state, dt, sol, centroid, ended: _Ended, v_eff, known,
         centroid=centroid_new, contacts=sol.contacts, load_points=load_points,
         spring_points=spring_points, known_u=known_u, shaking=shaking,
         last_move=ended.largest, untracked=guard.untracked, penetration=guard.deepest,
+        bolt_points=bolt_points,
+        bolt_broken=state.bolt_broken if bolt_broken is None else bolt_broken,
     )
 
 

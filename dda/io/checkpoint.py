@@ -136,6 +136,9 @@ def _state_to_data(state, store) -> dict:
         store.put(f"state/contacts/{name}", getattr(c, name))
     for name in _STATE_ARRAYS:
         store.put(f"state/{name}", getattr(state, name))
+    if len(state.bolt_broken):  # the bolts' ends and broken flags (a scene with bolts)
+        store.put("state/bolt_points", state.bolt_points)
+        store.put("state/bolt_broken", state.bolt_broken)
     shaking = []
     for s in state.shaking:
         if s is None:
@@ -359,6 +362,15 @@ def _state(data, store, model, initial):
         numbers[k] = float(v)
     contacts = ContactSet(c["vertex"], c["edge"], c["bj"], c["bk"], c["state"], c["xi0"],
                           c["t_n"], c["t_s"], history)
+    if model.bolts is not None:
+        n_bolts = len(model.bolts)
+        arrays["bolt_points"] = store.get({"array": "state/bolt_points"}, "state.bolt_points",
+                                          shape=(n_bolts, 2, 2))
+        broken = store.get({"array": "state/bolt_broken"}, "state.bolt_broken",
+                           dtype=np.int8, shape=(n_bolts,))
+        if broken.min(initial=0) < 0 or broken.max(initial=0) > 1:
+            raise CheckpointError("state.bolt_broken: not true or false")
+        arrays["bolt_broken"] = broken.astype(bool)
     return StepState(contacts=contacts, shaking=tuple(shaking), **arrays, **numbers)
 
 

@@ -290,6 +290,10 @@ def joint_from_data(data, where: str) -> JointMaterial:
 # ---------------------------------------------------------------------- the scene
 _SCENE_KEYS = {"gravity", "max_blocks", "max_vertices", "materials", "blocks", "joints",
                "shakes", "motions", "loads", "damping"}
+# keys a scene's data has only when the scene has what they hold
+_OPTIONAL_KEYS = {"bolts", "water"}
+_BOLT_KEYS = {"block_a", "point_a", "block_b", "point_b", "stiffness", "pretension",
+              "strength"}
 
 
 def scene_to_data(scene, store: ArrayStore) -> dict:
@@ -335,6 +339,12 @@ def scene_to_data(scene, store: ArrayStore) -> dict:
     }
     if scene.water is not None:
         data["water"] = scene.water.as_data()
+    if scene.bolts:
+        data["bolts"] = [{"block_a": int(b.block_a), "point_a": [float(v) for v in b.point_a],
+                          "block_b": int(b.block_b), "point_b": [float(v) for v in b.point_b],
+                          "stiffness": float(b.stiffness), "pretension": float(b.pretension),
+                          "strength": None if b.strength is None else float(b.strength)}
+                         for b in scene.bolts]
     for k, s in enumerate(scene.shakes):
         where = f"the shaking of block {names[s.block]!r}"
         record = s.history.record
@@ -367,7 +377,7 @@ def scene_from_data(data, store: ArrayStore):
     """The :class:`dda.Scene` of :func:`scene_to_data`'s data (every input checked again)."""
     from dda.scene import Scene
 
-    _table(data, "scene", _SCENE_KEYS | {"water"}, _SCENE_KEYS)  # (no water: a dry scene)
+    _table(data, "scene", _SCENE_KEYS | _OPTIONAL_KEYS, _SCENE_KEYS)
     try:
         limits = {k: data[k] for k in ("max_blocks", "max_vertices")}
         if not all(isinstance(v, int) and not isinstance(v, bool) for v in limits.values()):
@@ -452,6 +462,13 @@ def scene_from_data(data, store: ArrayStore):
                        {"table", "unit_weight"})
             scene.set_water_table(w["table"], unit_weight=_number(w, "unit_weight",
                                                                   "scene.water"))
+        for i, b in enumerate(_list(data.get("bolts", []), "scene.bolts")):
+            w = f"scene.bolts[{i}]"
+            _table(b, w, _BOLT_KEYS, _BOLT_KEYS)
+            scene.add_bolt(b["block_a"], _list(b["point_a"], w + ".point_a"), b["block_b"],
+                           _list(b["point_b"], w + ".point_b"), _number(b, "stiffness", w),
+                           pretension=_number(b, "pretension", w),
+                           strength=_number(b, "strength", w, allow_none=True))
     except SceneDataError:
         raise
     except (TypeError, ValueError, KeyError, IndexError) as exc:

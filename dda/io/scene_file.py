@@ -83,6 +83,15 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
     force = [0.0, -1e5]                   # or a table: { times = [0, 1], x = [0, 0],
                                           #               y = [0, -1e5] }  (held after 1 s)
 
+    [[bolt]]                              # a rock bolt: an axial spring between two
+    block_a = "top"                       # material points (one block may be fixed)
+    point_a = [2.0, 1.8]
+    block_b = "base"
+    point_b = [2.0, 0.5]
+    stiffness = 1e8                       # N/m per m of thickness
+    pretension = 5e3                      # optional, N per m (default 0)
+    strength = 2e5                        # optional: it breaks above this tension
+
     [[damping]]                           # Rayleigh damping C = mass M + stiffness K_e
     mass = 0.5                            # 1/s
     stiffness = 1e-4                      # s
@@ -484,7 +493,7 @@ class LoadedScene:
 
 #: the tables of a scene file, in the order they are read
 _TABLES = ("scene", "materials", "blocks", "cut", "joints", "shake", "prescribe", "load",
-           "damping", "water", "simulation", "output")
+           "bolt", "damping", "water", "simulation", "output")
 
 
 def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
@@ -540,6 +549,7 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     effects += _read_shaking(r, data, blocks, scene.shake, path.parent)
     effects += _read_motions(r, data, blocks, scene.prescribe_motion)
     effects += _read_loads(r, data, blocks, scene.add_point_load)
+    effects += _read_bolts(r, data, blocks, scene.add_bolt)
     _read_damping(r, data, blocks, scene.set_damping)
     if scene.damping_coefficients() is not None:
         effects.append("damping")
@@ -914,6 +924,29 @@ def _read_loads(r, data, blocks, add_point_load) -> list:
             force = r.pair(ld, p, "force", None)
         r.call(p, add_point_load, h, r.pair(ld, p, "point", None), force)
         effects.append(f"point load on {h}")
+    return effects
+
+
+def _read_bolts(r, data, blocks, add_bolt) -> list:
+    """``[[bolt]]``, each given to ``add_bolt`` (:meth:`dda.Scene.add_bolt`); the effects."""
+    effects = []
+    for i, b in enumerate(_array(r, data, "bolt")):
+        p = ("bolt", i)
+        r.table(b, p, {"block_a", "point_a", "block_b", "point_b", "stiffness", "pretension",
+                       "strength"})
+        ha, hb = _block_of(r, blocks, b, p, "block_a"), _block_of(r, blocks, b, p, "block_b")
+        for key in ("point_a", "point_b"):
+            if key not in b:
+                raise r.error(p, f"needs '{key}'")
+        stiffness = r.number(b, p, "stiffness")
+        pretension = r.number(b, p, "pretension", default=0.0)
+        strength = r.number(b, p, "strength") if "strength" in b else None
+        index = r.call(p, add_bolt, ha, r.pair(b, p, "point_a", None), hb,
+                       r.pair(b, p, "point_b", None), stiffness, pretension=pretension,
+                       strength=strength)
+        more = f", pretension {pretension:g} N/m" if pretension else ""
+        more += "" if strength is None else f", strength {strength:g} N/m"
+        effects.append(f"bolt {index} from {ha} to {hb} ({stiffness:g} N/m{more})")
     return effects
 
 

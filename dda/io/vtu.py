@@ -267,7 +267,8 @@ def frame_to_mesh(frame: Frame, plain_names: bool = True) -> meshio.Mesh:
         cell_data.update({k: list(cell_data[field_name(k)]) for k in PLAIN_NAMES})
         point_data.update({k: point_data[field_name(k)] for k in PLAIN_NAMES
                            if field_name(k) in point_data})
-    return meshio.Mesh(points, cells, point_data=point_data, cell_data=cell_data)
+    return _with_bolts(meshio.Mesh(points, cells, point_data=point_data,
+                                   cell_data=cell_data), frame)
 
 
 def _block_rows(frame: Frame, order: np.ndarray) -> dict:
@@ -317,3 +318,41 @@ def _contact_rows(frame: Frame) -> dict:
         "contact_state": frame.contact_state.astype(float),
         "vertex_block": blocks[:, 0], "edge_block": blocks[:, 1],
     }
+
+
+def _with_bolts(mesh: meshio.Mesh, frame: Frame) -> meshio.Mesh:
+    """``mesh`` with the frame's bolts (:mod:`dda.bolts`) as line cells after its other
+    cells, from end a to end b; ``mesh`` itself in a scene without bolts.
+
+    The bolt cells have ``kind`` 2 and cell data ``bolt_force [N/m]`` (the axial force,
+    tension positive; 0 once broken), ``bolt_state`` (0 intact, 1 broken) and ``bolt_id``
+    (the bolt's index, ``Scene.add_bolt``'s return); those are NaN (float) or -1 (integers)
+    on the other cells, and the other cells' fields NaN or -1 on the bolts. The bolts' ends
+    are points of their own, with zero point data.
+    """
+    ends = frame.bolt_points
+    if ends is None or not len(ends):
+        return mesh
+    nb = len(ends)
+    first = len(mesh.points)
+    points = np.concatenate([mesh.points, _pad3(np.asarray(ends, dtype=float).reshape(-1, 2))])
+    point_data = {k: np.concatenate([v, np.zeros((2 * nb, *np.shape(v)[1:]), np.asarray(v).dtype)])
+                  for k, v in mesh.point_data.items()}
+    cells = [(c.type, c.data) for c in mesh.cells]
+    sizes = [len(c.data) for c in mesh.cells]
+    cells.append(("line", first + np.arange(2 * nb).reshape(nb, 2)))
+
+    def filled(like, n):
+        like = np.asarray(like)
+        fill = np.nan if like.dtype.kind == "f" else (-1 if like.dtype.kind == "i" else 0)
+        return np.full((n, *like.shape[1:]), fill, dtype=like.dtype)
+
+    cell_data = {k: [*v, filled(v[0], nb)] for k, v in mesh.cell_data.items()}
+    if "kind" in cell_data:
+        cell_data["kind"][-1] = np.full(nb, 2, dtype=cell_data["kind"][-1].dtype)
+    broken = np.asarray(frame.bolt_broken, dtype=bool)
+    for name, values in (("bolt_force [N/m]", np.asarray(frame.bolt_force, dtype=float)),
+                         ("bolt_state", broken.astype(np.int64)),
+                         ("bolt_id", np.arange(nb, dtype=np.int64))):
+        cell_data[name] = [filled(values, n) for n in sizes] + [values]
+    return meshio.Mesh(points, cells, point_data=point_data, cell_data=cell_data)

@@ -23,6 +23,7 @@
 - :mod:`dda.kernels.dashpot`: each contact's impact dashpot, and its terms in legacy DDA's
   springs;
 - :mod:`dda.kernels.joints`: each contact's joint row and the deepest committed spring;
+- :mod:`dda.kernels.bolts`: a step's bolt terms and the bolts' moved ends (:mod:`dda.bolts`);
 - :func:`dda.kernels.assembly.newton_residuals`: a Newton iterate's out-of-balance vectors;
 - :mod:`dda.kernels.dense_passes` and :mod:`dda.kernels.dense_newton`: on a system solved
   dense, every OPEN-CLOSE pass (with legacy DDA's pull-back and step end) and every Newton

@@ -39,6 +39,11 @@ class StepProblem:
     rigid : (n_blocks,) bool or None, blocks with 3 unknowns (no strain)
     factors : FactorSet or None, the solver's factorizations kept from step to step
         (:meth:`NonlinearSolver.factors`); one-off ones when None
+    bolts : :class:`dda.bolts.BoltTerm` of the step's intact bolts, or None (a scene without
+        bolts, or with every bolt broken): axial springs that couple their two blocks like a
+        contact, linear in the step's increments. Their block pairs follow the contacts' in
+        :attr:`pair_blocks` and in the :attr:`pattern`; :meth:`with_bolts` appends their
+        stiffness and forces to the contacts'.
     """
 
     dt: float
@@ -50,6 +55,7 @@ class StepProblem:
     max_open_close: int = 12
     rigid: np.ndarray | None = None
     factors: FactorSet | None = None
+    bolts: object | None = None
 
     def factor(self, symmetric: bool) -> SparseFactor | None:
         """Who factorizes this step's sparse systems, symmetric (the OPEN-CLOSE passes) or
@@ -61,11 +67,36 @@ class StepProblem:
         """The assembly's index work for this step's blocks and contacts (built once, and
         kept for the next step when its blocks and contacts are the same)."""
         with section("assembly"):
-            args = (self.free, self.element.bj, self.element.bk, self.rigid)
+            el = self.element
+            args = ((self.free, el.bj, el.bk, self.rigid) if self.bolts is None
+                    else (self.free, *self.pair_blocks, self.rigid))
             if self.factors is None:
                 return SystemPattern(*args)
             return self.factors.kept("pattern", args,
                                      lambda: SystemPattern(*args, cache=self.factors))
+
+
+    @property
+    def pair_blocks(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(bj, bk)``: the two blocks of every coupling term of the system, the contacts'
+        and then the bolts'."""
+        el = self.element
+        if self.bolts is None:
+            return el.bj, el.bk
+        kept = self.__dict__.get("_pair_blocks")
+        if kept is None:
+            kept = self.__dict__["_pair_blocks"] = (
+                np.concatenate([np.asarray(el.bj, dtype=np.int64), self.bolts.bj]),
+                np.concatenate([np.asarray(el.bk, dtype=np.int64), self.bolts.bk]))
+        return kept
+
+    def with_bolts(self, pair_k, pair_f):
+        """The contacts' stiffness and forces on ``[d_j; d_k]`` with the bolts' appended
+        (:meth:`dda.bolts.BoltTerm.joined`), the pairs of :attr:`pair_blocks`; as given
+        without bolts."""
+        if self.bolts is None:
+            return pair_k, pair_f
+        return self.bolts.joined(pair_k, pair_f)
 
 
 @dataclass

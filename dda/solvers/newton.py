@@ -3,10 +3,12 @@
 After the OPEN-CLOSE iteration has found the contact states, Newton iterations solve the
 nonlinear balance of the step
 
-    R(d) = K~ d - F~ + sum_c [t_n E^T + t_s I^T](d) = 0
+    R(d) = K~ d - F~ + sum_c [t_n E^T + t_s I^T](d) + sum_b [K_b d - f_b] = 0
 
-with the contact forces evaluated exactly at every trial state (gaps from the moved geometry,
-shear force from the friction law's return map built from the committed history) and the
+(the last sum: the bolts between two free blocks, linear in the step, :mod:`dda.bolts`; an
+anchored bolt is in ``K~`` and ``F~``) with the contact forces evaluated exactly at every
+trial state (gaps from the moved geometry, shear force from the friction law's return map
+built from the committed history) and the
 consistent tangent of :meth:`dda.contact.ContactElement.response` (geometric terms and the
 unsymmetric slip coupling included), until the out-of-balance force is below ``tol`` times the
 size of the forces in play (or has reached the round-off floor of a stiff penalty system:
@@ -181,7 +183,7 @@ class NewtonRaphson(NonlinearSolver):
         free = problem.free
         pattern = problem.pattern
         if (DENSE_NEWTON and pattern.n <= DENSE_LIMIT and pattern.unknowns > 0
-                and len(el) and el.kernel_laws is not None):
+                and len(el) and el.kernel_laws is not None and problem.bolts is None):
             return self._dense(problem, d, max_iter)
         d = d.copy()
         norms: list[float] = []
@@ -192,7 +194,10 @@ class NewtonRaphson(NonlinearSolver):
         force_norm = _norm(problem.block_f[free])
         for it in range(max_iter + 1):
             resp = el.response(d)
-            block_r, r_free, inertia_free, contact_free = _residuals(problem, d, resp.residual)
+            pair_r = resp.residual
+            if problem.bolts is not None:  # the bolts' out-of-balance after the contacts'
+                pair_r = np.concatenate([pair_r, problem.bolts.residual(d)])
+            block_r, r_free, inertia_free, contact_free = _residuals(problem, d, pair_r)
             norm = _norm(r_free)
             scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
             if norm <= self.tol * scale or _at_round_off(norms + [norm], scale):
@@ -229,8 +234,11 @@ class NewtonRaphson(NonlinearSolver):
                     and np.count_nonzero(states != factored) <= NEAR_SWITCHES)
             done = factor.factorizations if factor is not None else 0
             try:
-                step = assemble_and_solve(problem.block_k, -block_r, free, el.bj, el.bk,
-                                          resp.stiffness, -resp.residual,
+                tangent = resp.stiffness
+                if problem.bolts is not None:
+                    tangent = problem.with_bolts(tangent, resp.residual)[0]
+                step = assemble_and_solve(problem.block_k, -block_r, free,
+                                          *problem.pair_blocks, tangent, -pair_r,
                                           np.zeros_like(problem.d_known),
                                           problem.pattern, factor=factor, near=near)
             except SingularSystemError as exc:
@@ -344,18 +352,20 @@ def _residuals(problem, d, pair_r):
     ``K_b d - f_b`` (every block), and of the free blocks only the total out-of-balance
     ``r``, the blocks' ``K_b d`` and the contacts' summed ``|r_c|`` (the last two measure the
     forces |r| is judged against)."""
-    el, free = problem.element, problem.free
+    free, el = problem.free, problem.element
+    # the blocks of pair_r's rows: the contacts' (and after them the bolts')
+    bj, bk = (el.bj, el.bk) if getattr(problem, "bolts", None) is None else problem.pair_blocks
     if RESIDUAL_KERNEL:
         with section("assembly"):
             rigid = problem.rigid if problem.rigid is not None else np.zeros(len(free), bool)
             return newton_residuals(problem.block_k, d, problem.block_f, free, rigid,
-                                    np.asarray(el.bj, dtype=np.int64),
-                                    np.asarray(el.bk, dtype=np.int64),
+                                    np.asarray(bj, dtype=np.int64),
+                                    np.asarray(bk, dtype=np.int64),
                                     np.ascontiguousarray(pair_r, dtype=np.float64))
     inertia = np.einsum("bij,bj->bi", problem.block_k, d)
     block_r = inertia - problem.block_f
-    r = assemble_vector(block_r, free, el.bj, el.bk, pair_r, problem.rigid)
-    contact = assemble_vector(np.zeros_like(block_r), free, el.bj, el.bk, np.abs(pair_r),
+    r = assemble_vector(block_r, free, bj, bk, pair_r, problem.rigid)
+    contact = assemble_vector(np.zeros_like(block_r), free, bj, bk, np.abs(pair_r),
                               problem.rigid)
     return block_r, r[free], inertia[free], contact[free]
 

@@ -258,8 +258,9 @@ def _solve_pass(problem, k, f):
     the step's start and the gaps the pass judges (:meth:`dda.contact.ContactElement.
     judged_gap`)."""
     el = problem.element
-    d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj, el.bk, k,
-                           f, problem.d_known, problem.pattern,
+    k, f = problem.with_bolts(k, f)
+    d = assemble_and_solve(problem.block_k, problem.block_f, problem.free,
+                           *problem.pair_blocks, k, f, problem.d_known, problem.pattern,
                            factor=problem.factor(symmetric=True))
     gap, dgs = el.linear_gaps(d)
     return d, gap, dgs, el.judged_gap(gap)
@@ -321,10 +322,11 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
 
 def dense_eligible(problem: StepProblem) -> bool:
     """Whether the step's OPEN-CLOSE takes the dense kernel (:func:`_dense`): a dense system
-    with unknowns and contacts, the built-in laws, no pass log."""
+    with unknowns and contacts, the built-in laws, no pass log, no bolts."""
     el, pattern = problem.element, problem.pattern
     return (DENSE_PASSES and PASS_LOG is None and pattern.n <= DENSE_LIMIT
-            and pattern.unknowns > 0 and len(el) > 0 and el.kernel_laws is not None)
+            and pattern.unknowns > 0 and len(el) > 0 and el.kernel_laws is not None
+            and problem.bolts is None)
 
 
 def dense_arguments(problem: StepProblem) -> tuple:
@@ -487,9 +489,10 @@ def _why(state, new_state, lag_ok) -> tuple[int, int, int, int]:
 def _without_contacts(problem) -> OpenCloseResult:
     el = problem.element
     try:
-        d = assemble_and_solve(problem.block_k, problem.block_f, problem.free, el.bj, el.bk,
-                               np.zeros((0, 12, 12)), np.zeros((0, 12)), problem.d_known,
-                               problem.pattern, factor=problem.factor(symmetric=True))
+        k, f = problem.with_bolts(np.zeros((0, 12, 12)), np.zeros((0, 12)))
+        d = assemble_and_solve(problem.block_k, problem.block_f, problem.free,
+                               *problem.pair_blocks, k, f, problem.d_known, problem.pattern,
+                               factor=problem.factor(symmetric=True))
     except SingularSystemError as exc:
         return OpenCloseResult(False, 1, f"singular system: {exc}")
     z = np.zeros(0)
