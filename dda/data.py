@@ -129,7 +129,30 @@ def result_dataset(result):
     pair_coords, pair_variables = _pair_data(result, names)
     coords.update(pair_coords)
     variables.update(pair_variables)
+    bolt_coords, bolt_variables = _bolt_data(result)
+    coords.update(bolt_coords)
+    variables.update(bolt_variables)
     return xr.Dataset(variables, coords=coords, attrs=_run_attributes(result))
+
+
+def _bolt_data(result) -> tuple[dict, dict]:
+    """The ``bolt`` coordinate and ``bolt_force``, ``bolt_broken`` (time x bolt); nothing in
+    a scene without bolts."""
+    rows = result._bolt_rows
+    if not rows or not len(rows[0][0]):
+        return {}, {}
+    force = np.stack([r[0] for r in rows]).astype(np.float64)
+    broken = np.stack([r[1] for r in rows]).astype(np.int8)  # (NetCDF3 has no booleans)
+    coords = {"bolt": ("bolt", np.arange(force.shape[1], dtype=np.int32),
+                       {"long_name": "bolt index (Scene.add_bolt's return)"})}
+    variables = {
+        "bolt_force": (("time", "bolt"), force,
+                       {"units": "N/m", "long_name": "bolt axial force per m of thickness, "
+                                                     "tension positive (0 once broken)"}),
+        "bolt_broken": (("time", "bolt"), broken,
+                        {"units": "1", "long_name": "1 once the bolt has broken"}),
+    }
+    return coords, variables
 
 
 def _block_variables(result) -> dict:

@@ -683,3 +683,21 @@ def test_points_move_with_their_blocks():
     d[1, :2] = (0.1, -0.2)
     moved = moved_points(points, np.array([[0, 1]]), centroid, d)
     np.testing.assert_allclose(moved[0], [[0.5, -0.5], [1.1, 0.8]], atol=1e-15)
+
+
+def test_the_dataset_carries_the_bolts(tmp_path):
+    """Result.to_xarray: bolt_force and bolt_broken over time x bolt, equal to the result's
+    own, and through NetCDF."""
+    xr = pytest.importorskip("xarray")
+    strength = 0.5 * held_tension(0.0)
+    scene, top, t = bolted_incline(0.0, stiffness=1e6, strength=strength)
+    result = dda.Simulation(scene, dt=1e-3).run(0.1)
+    ds = result.to_xarray()
+    np.testing.assert_array_equal(ds.bolt_force.sel(bolt=0).values, result.bolt_force(0))
+    np.testing.assert_array_equal(ds.bolt_broken.sel(bolt=0).values.astype(bool),
+                                  result.bolt_broken(0))
+    assert result.bolt_broken(0).any() and ds.bolt_force.attrs["units"] == "N/m"
+    ds.to_netcdf(tmp_path / "run.nc")
+    back = xr.open_dataset(tmp_path / "run.nc")
+    np.testing.assert_array_equal(back.bolt_force.values, ds.bolt_force.values)
+    back.close()
