@@ -18,13 +18,12 @@ from dda.contact import (
     check_friction_law,
 )
 from dda.io.scene_data import law_from_data, law_to_data
-from dda.studies import strength_reduction as sr
+from dda.studies.factor_of_safety import Criterion, StrengthReductionTrial
 from dda.studies.reduction import (
     ReducedBartonBandis,
     reduce_friction,
     reduced_scene,
 )
-from dda.studies.strength_reduction import Criterion, StrengthReductionTrial
 from dda.studies.sweep import Case, run_case
 from tests.conftest import box, incline_scene
 
@@ -102,7 +101,7 @@ def test_a_law_of_ones_own_gives_its_reduction_or_is_refused_by_name():
     with pytest.raises(TypeError, match="the joint between 'base' and 'top'"):
         reduced_scene(scene, 1.5)
     with pytest.raises(TypeError, match="the joint between 'base' and 'top'"):
-        sr.strength_reduction(scene, executor=ThreadPoolExecutor(1))
+        dda.studies.strength_reduction(scene, executor=ThreadPoolExecutor(1))
 
 
 def test_reduced_scene_changes_the_joints_only():
@@ -154,7 +153,7 @@ def test_block_on_an_incline_factor_is_tan_phi_over_tan_theta(solver):
     scene, top, _ = incline_scene(30.0, slope_deg=25.0)
     expected = math.tan(math.radians(30.0)) / math.tan(math.radians(25.0))
     with ThreadPoolExecutor(2) as pool:
-        fos = sr.strength_reduction(scene, executor=pool, solver=solver)
+        fos = dda.studies.strength_reduction(scene, executor=pool, solver=solver)
     assert fos.factor == pytest.approx(expected, rel=0.02)
     lo, hi = fos.bracket
     assert hi / lo - 1 <= 0.01 and lo <= fos.factor <= hi
@@ -173,7 +172,7 @@ def test_dynamic_trials_find_the_same_factor():
     scene, top, _ = incline_scene(30.0, slope_deg=25.0)
     expected = math.tan(math.radians(30.0)) / math.tan(math.radians(25.0))
     with ThreadPoolExecutor(2) as pool:
-        fos = sr.strength_reduction(scene, executor=pool,
+        fos = dda.studies.strength_reduction(scene, executor=pool,
                                     criterion=Criterion(analysis="dynamic"))
     assert fos.factor == pytest.approx(expected, rel=0.02)
     assert fos.plan.steps == 200
@@ -183,7 +182,7 @@ def test_the_default_executor_is_a_process_pool_and_the_scene_travels_pickled():
     scene, top, _ = incline_scene(30.0, slope_deg=25.0)
     expected = math.tan(math.radians(30.0)) / math.tan(math.radians(25.0))
     start = time.perf_counter()
-    fos = sr.strength_reduction(scene, per_round=2, tolerance=0.02)
+    fos = dda.studies.strength_reduction(scene, per_round=2, tolerance=0.02)
     assert fos.factor == pytest.approx(expected, rel=0.02)
     assert time.perf_counter() - start < 60.0
 
@@ -195,13 +194,13 @@ def test_a_scene_that_does_not_pickle_is_refused_before_any_trial(rock):
     scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(phi=30.0)))
     scene.prescribe_motion(table, displacement=lambda t: (0.0, 0.0))
     with pytest.raises(TypeError, match="cannot be sent to worker processes"):
-        sr.strength_reduction(scene)
+        dda.studies.strength_reduction(scene)
 
 
 def test_the_search_widens_the_bracket_and_says_when_it_hits_its_limits(rock):
     scene, top, _ = incline_scene(30.0, slope_deg=25.0)
     with ThreadPoolExecutor(2) as pool:
-        fos = sr.strength_reduction(scene, executor=pool, bracket=(2.0, 3.0))
+        fos = dda.studies.strength_reduction(scene, executor=pool, bracket=(2.0, 3.0))
         assert fos.factor == pytest.approx(1.2381, rel=0.02)  # from a bracket above it
         assert min(r["factor"] for r in fos.trials) < 1.0
         # a block on flat ground never slides
@@ -209,7 +208,7 @@ def test_the_search_widens_the_bracket_and_says_when_it_hits_its_limits(rock):
         flat.add_block(box(0, 0, 2, 0.2), rock, fixed=True)
         flat.add_block(box(0.9, 0.2, 0.2, 0.2), rock)
         flat.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(phi=30.0)))
-        fos = sr.strength_reduction(flat, executor=pool, limits=(0.1, 8.0))
+        fos = dda.studies.strength_reduction(flat, executor=pool, limits=(0.1, 8.0))
         assert fos.factor == math.inf and fos.bracket == (8.0, math.inf)
         assert "stable at every factor" in fos.notes[-1]
         assert fos.failing_blocks == []
@@ -218,9 +217,9 @@ def test_the_search_widens_the_bracket_and_says_when_it_hits_its_limits(rock):
 def test_bad_arguments_are_refused_with_their_name():
     scene, top, _ = incline_scene(30.0)
     with pytest.raises(ValueError, match="bracket"):
-        sr.strength_reduction(scene, bracket=(2.0, 1.0))
+        dda.studies.strength_reduction(scene, bracket=(2.0, 1.0))
     with pytest.raises(ValueError, match="tolerance"):
-        sr.strength_reduction(scene, tolerance=0.0)
+        dda.studies.strength_reduction(scene, tolerance=0.0)
     with pytest.raises(ValueError, match="analysis"):
         Criterion(analysis="quasi")
     with pytest.raises(ValueError, match="displacement_ratio"):
@@ -228,7 +227,7 @@ def test_bad_arguments_are_refused_with_their_name():
     with pytest.raises(ValueError, match="steps"):
         Criterion(steps=1)
     with pytest.raises(TypeError, match="Criterion"):
-        sr.strength_reduction(scene, criterion={"analysis": "static"})
+        dda.studies.strength_reduction(scene, criterion={"analysis": "static"})
     no_gravity, _, _ = incline_scene(30.0, gravity=None)
     with pytest.raises(ValueError, match="duration"):
         Criterion().plan(no_gravity)
@@ -238,7 +237,7 @@ def test_the_picture_shows_the_failing_blocks_and_the_trials(tmp_path):
     pytest.importorskip("matplotlib")
     scene, top, _ = incline_scene(30.0, slope_deg=25.0)
     with ThreadPoolExecutor(2) as pool:
-        fos = sr.strength_reduction(scene, executor=pool, tolerance=0.05)
+        fos = dda.studies.strength_reduction(scene, executor=pool, tolerance=0.05)
     path = tmp_path / "fos.png"
     fig = fos.picture(path)
     assert path.stat().st_size > 10_000

@@ -19,7 +19,7 @@ FLOOR = 1e-6
 
 
 def picture(fos, path=None):
-    """Draw ``fos`` (a :class:`dda.studies.strength_reduction.StrengthReduction`); write it
+    """Draw ``fos`` (a :class:`dda.studies.factor_of_safety.StrengthReduction`); write it
     to ``path`` (PNG, PDF, SVG by suffix) and close it when given. Returns the figure."""
     import matplotlib
 
