@@ -1,45 +1,74 @@
 """Factor of safety by strength reduction: the largest F the joints can be weakened by.
 
-``fos = strength_reduction(scene)`` divides every joint's strength by trial factors ``F``
-(``tan(phi_F) = tan(phi) / F``, ``c_F = c / F``: :mod:`dda.studies.reduction`), runs each
-weakened scene for a while and calls it stable or failed by how far its free blocks move
+``fos = dda.studies.strength_reduction(scene)`` divides every joint's strength by trial
+factors ``F`` (``tan(phi_F) = tan(phi) / F``, ``c_F = c / F``: :mod:`dda.studies.reduction`),
+runs each weakened scene for a while and calls it stable or failed by how far its free blocks move
 (:class:`Criterion`), and narrows the bracket ``F_stable < F < F_failed`` until it is within
 a tolerance. Each trial is a :class:`~dda.studies.sweep.Case` run by the sweep runner
 (:func:`~dda.studies.sweep.sweep`), so the trials of a round run in parallel on any
 :class:`concurrent.futures.Executor`: local processes by default, a Dask cluster with
 ``executor=distributed.Client(...).get_executor()``.
 
-**The trial** (:class:`Criterion`). By default a trial is a *static* analysis (the velocity
-is set to zero at the start of every step, METHOD.md section 2): a step then moves a block
-by ``a dt^2 / 2``, where ``a`` is its unbalanced acceleration (out-of-balance force over
-mass). A stable scene finds its equilibrium in the first steps and stops; an unstable one
-creeps by the same amount every step, however small ``a`` is. The run is ``steps`` steps of
-``dt``, and a free block (not fixed, shaken or moved by a prescribed motion) *fails* when
+**The trial** (:class:`Criterion`). With the fully implicit solver a trial is a *static*
+analysis (the velocity is set to zero at the start of every step, METHOD.md section 2): a
+step then moves a block by ``a dt^2 / 2``, where ``a`` is its unbalanced acceleration
+(out-of-balance force over mass). A stable scene finds its equilibrium in the first steps and
+stops; an unstable one creeps by the same amount every step, however small ``a`` is. With
+legacy DDA a trial is *dynamic* (the scene moves from rest under its weight): its pull-back
+friction does not hold a static trial's long steps (below). The run is ``N`` steps of ``dt``
+(length ``T``), and a free block (not fixed, shaken or moved by a prescribed motion) *fails*
+when
 
 1. it moves more than its threshold ``d_b`` during the second half of the run (the first
    half lets the scene settle on its springs), or
 2. in the second half, its last step moved it faster than ``v_b = d_b / (T / 2)`` (it would
    cover its threshold in another half run), or
-3. it has moved more than ``10 d_b`` since the start (the run stops there: the outcome is
-   decided).
+3. it has moved more than ``10 d_b`` since the start (the outcome is decided).
 
-A trial stops as soon as one block fails. ``d_b`` is ``displacement_ratio`` (1%) of the
-block's size (the square root of its area) unless an absolute ``displacement`` is given.
-For a block creeping at a steady rate, (1) and (2) are the same test. The smallest unbalanced
-acceleration a trial detects is ``a_min = 4 d / (N dt^2)`` (static; ``8 d / (3 T^2)``
-dynamic, from rest); the default run is chosen so that ``a_min`` is ``resolution`` (1e-3)
-times gravity for the smallest free block::
+A trial stops as soon as one block fails; the blocks listed as failing are those that had
+moved at least a tenth of their criterion by then (the mechanism). ``d_b`` is
+``displacement_ratio`` (1%) of the block's size (the square root of its area) unless an
+absolute ``displacement`` is given; a movement is the largest displacement of the block's
+vertices. For a block creeping at a steady rate (1) and (2) are the same test. The smallest
+unbalanced acceleration a trial detects is ``a_min = 4 d / (N dt^2)`` (static) or ``8 d / (3
+T^2)`` (dynamic, from rest), and the default run makes it ``resolution`` (1e-3) times
+gravity for the smallest free block::
 
     static:   dt = sqrt(4 d_min / (N a_min)),   T = N dt     (N = 40 steps)
     dynamic:  T = sqrt(8 d_min / (3 a_min)),    dt = T / N   (N = 200 steps)
 
+A static ``dt`` is not a time step of any motion, but the simulation warns above 100 contact
+periods (:func:`dda.plausibility.check_time_step`), so it is capped at 50 periods of the
+lightest free block on the stiffest joint, with more steps for the same ``a_min``. On the two
+toppling columns of the tests (1 m blocks, 10 GN/m) that is 166 steps of 0.157 s instead of
+40 of 0.319 s: the same factor (1.298), 0.64 s of CPU for the 12 trials instead of 0.28 s.
+
 **Resolution.** Near the factor of safety ``F*`` the out-of-balance force is small: a block on
 an incline of ``theta`` at ``F = F* (1 + delta)`` has ``a = g sin(theta) delta / (1 +
-delta)``. A trial calls it stable while ``a < a_min``, so the bisection finds ``F`` high by up
-to ``delta = resolution / sin(theta)`` (0.24% at 25 degrees with the default 1e-3). A finer
-``resolution`` costs a longer (dynamic) or coarser-stepped (static) trial. Measured on the
-block on a 25 degree incline (phi 30 degrees, ``F* = 1.2381``; ``tests/test_strength_
-reduction.py``): see the README notes of issue 23.
+delta)``. A trial calls it stable while ``a < a_min``, so the search may place ``F`` above
+``F*`` by up to ``delta = resolution / sin(theta)``, 0.24% at 25 degrees with the default
+1e-3; a finer ``resolution`` costs a longer (dynamic) or more-stepped (static) trial.
+Measured on a 0.5 m block on a 25 degree incline, phi 30 (``F* = 1.2381``), one trial at
+``F* (1 + delta)``:
+
+==========================  =============  =========  =========  =========  ==========
+criterion ratio at delta    -1% and -0.1%  +0.1%      +0.2%      +0.3%      cost/trial
+==========================  =============  =========  =========  =========  ==========
+static, Newton or legacy    0.0002         0.42       0.84       1.26 fail  10 ms (40)
+dynamic, Newton             0.0003-0.0016  0.65       1.00 fail  1.01 fail  31 ms (200)
+dynamic, legacy             0.0002         0.47       0.93       1.01 fail  28 ms (200)
+==========================  =============  =========  =========  =========  ==========
+
+The static ratio grows linearly, 0.42 per 0.1%: it crosses 1 at ``delta = 0.237%``, the
+designed ``1e-3 / sin 25``. A stable trial settles to 2e-4 (the elastic settling on the
+springs, counted by criterion 3). The search then finds ``F = 1.244`` (+0.46%) with every
+solver and analysis. On the two toppling columns of the tests, legacy DDA's static trials
+went wrong: at ``F = 1.2`` (Goodman and Bray's 1.3034) the slender column turned by 28 mrad
+against a square that stood still, OPEN-CLOSE not settling 18 times, and the search gave
+1.192 (-8.6%), not monotonic in ``F``; its dynamic trials give 1.298 (-0.40%), as do
+Newton's static and dynamic ones. Hence ``analysis="auto"``: static for Newton (a third of
+the cost, and clearer: a stable trial settles to 2e-4 of the criterion, a dynamic one to up
+to 2e-3 on the incline and 5e-3 on the columns), dynamic for legacy DDA.
 
 **The search.** Round 0 runs ``per_round`` factors spread geometrically over ``bracket``
 (ends included, at least the two ends); while every trial is stable (or every one failed)
@@ -62,15 +91,21 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dda.errors import SimulationError
+from dda.plausibility import DT_PERIODS
 from dda.simulation import Simulation
 from dda.studies.reduction import reduced_scene
 from dda.studies.sweep import Case, Study, SweepRows, make_solver, sweep
 
 __all__ = ["Criterion", "TrialPlan", "StrengthReductionTrial", "StrengthReduction",
-           "strength_reduction", "GROSS_MOVEMENT"]
+           "strength_reduction", "analysis_for", "GROSS_MOVEMENT"]
 
 #: a block that has moved this many thresholds since the start has failed, whatever follows
 GROSS_MOVEMENT = 10.0
+#: in a failed trial, the blocks listed as failing: those whose criterion ratio reached this
+#: share of 1 when the trial was decided (the mechanism: on the five toppling columns of the
+#: tests they stood at 0.48 to 1.0 when the first one crossed 1, at F 0.75% above F*; standing
+#: blocks settle to about 1e-4)
+FAILING_SHARE = 0.1
 #: the default steps of a trial, per analysis
 DEFAULT_STEPS = {"static": 40, "dynamic": 200}
 
@@ -82,9 +117,11 @@ class Criterion:
 
     Parameters
     ----------
-    analysis : {"static", "dynamic"}
+    analysis : {"auto", "static", "dynamic"}
         Static: the velocity is reset every step, an unstable block creeps step after step.
-        Dynamic: the scene moves from rest under its weight.
+        Dynamic: the scene moves from rest under its weight. "auto" (the default): static
+        with the fully implicit solver, dynamic with legacy DDA (whose pull-back friction
+        does not hold a static trial's long steps; module docstring).
     resolution : float
         The smallest unbalanced acceleration a trial must detect, as a fraction of gravity;
         it sets the default run (``dt`` static, the duration dynamic).
@@ -104,9 +141,12 @@ class Criterion:
     --------
     >>> Criterion(analysis="dynamic").analysis, Criterion().resolution
     ('dynamic', 0.001)
+    >>> from dda.studies.factor_of_safety import analysis_for
+    >>> analysis_for("auto", "newton"), analysis_for("auto", "legacy")
+    ('static', 'dynamic')
     """
 
-    analysis: str = "static"
+    analysis: str = "auto"
     resolution: float = 1e-3
     displacement_ratio: float = 0.01
     displacement: float | None = None
@@ -115,9 +155,9 @@ class Criterion:
     duration: float | None = None
 
     def __post_init__(self):
-        if self.analysis not in DEFAULT_STEPS:
-            raise ValueError(f"Criterion: analysis must be 'static' or 'dynamic', got "
-                             f"{self.analysis!r}")
+        if self.analysis not in ("auto", *DEFAULT_STEPS):
+            raise ValueError(f"Criterion: analysis must be 'auto', 'static' or 'dynamic', "
+                             f"got {self.analysis!r}")
         for name in ("resolution", "displacement_ratio", "displacement", "velocity",
                      "duration"):
             value = getattr(self, name)
@@ -131,10 +171,12 @@ class Criterion:
             raise ValueError(f"Criterion: steps must be a whole number of at least 2, got "
                              f"{self.steps!r}")
 
-    def plan(self, scene) -> TrialPlan:
-        """The trial this criterion gives for ``scene``: its step, length and thresholds."""
+    def plan(self, scene, solver="newton") -> TrialPlan:
+        """The trial this criterion gives for ``scene`` and ``solver`` (a name or a solver):
+        its analysis, step, length and thresholds."""
         from dda.model import Model
 
+        analysis = analysis_for(self.analysis, solver)
         scene.validate()
         model = Model(scene)
         watched = model.free.copy()
@@ -149,7 +191,7 @@ class Criterion:
         else:
             threshold = self.displacement_ratio * size
         d_min = float(threshold[watched].min())
-        steps = int(self.steps or DEFAULT_STEPS[self.analysis])
+        steps = int(self.steps or DEFAULT_STEPS[analysis])
         if self.duration is not None:
             duration = float(self.duration)
         else:
@@ -158,14 +200,44 @@ class Criterion:
                                  "acceleration to set the trial's length by; give "
                                  "Criterion(duration=...)")
             a_min = self.resolution * scene.gravity
-            if self.analysis == "static":
-                duration = steps * math.sqrt(4.0 * d_min / (steps * a_min))
+            if analysis == "static":
+                dt = math.sqrt(4.0 * d_min / (steps * a_min))
+                cap = _step_cap(model)
+                if self.steps is None and dt > cap:  # more, shorter steps: same resolution
+                    dt = cap
+                    steps = max(steps, math.ceil(4.0 * d_min / (a_min * dt * dt)))
+                duration = steps * dt
             else:
                 duration = math.sqrt(8.0 * d_min / (3.0 * a_min))
         dt = duration / steps
         speed = (np.full(len(size), float(self.velocity)) if self.velocity is not None
                  else threshold / (0.5 * duration))
-        return TrialPlan(self, self.analysis, dt, duration, steps, watched, threshold, speed)
+        return TrialPlan(self, analysis, dt, duration, steps, watched, threshold, speed)
+
+
+def analysis_for(analysis: str, solver) -> str:
+    """The analysis of a trial: ``analysis`` itself, or for "auto" "dynamic" with legacy DDA
+    (the solver "legacy" or a :class:`dda.solvers.LegacyPullBack`) and "static" with any
+    other solver."""
+    if analysis != "auto":
+        return analysis
+    from dda.solvers import LegacyPullBack
+
+    legacy = solver == "legacy" if isinstance(solver, str) else isinstance(solver,
+                                                                          LegacyPullBack)
+    return "dynamic" if legacy else "static"
+
+
+def _step_cap(model) -> float:
+    """The longest static step: ``DT_PERIODS / 2`` contact periods ``2 pi sqrt(m / p)`` of
+    the lightest free block on the stiffest joint (:func:`dda.plausibility.check_time_step`
+    warns at ``DT_PERIODS``); no cap when every penalty is "auto"."""
+    penalties = np.asarray(model.joints.normal_penalty, dtype=float)
+    penalties = penalties[np.isfinite(penalties)]
+    if len(penalties) == 0:
+        return math.inf
+    mass = (model.density * model.size ** 2)[model.free].min()
+    return 0.5 * DT_PERIODS * 2.0 * math.pi * math.sqrt(mass / penalties.max())
 
 
 @dataclass(frozen=True, eq=False)
@@ -271,11 +343,15 @@ class _Watch:
         total, late, speed = self.movements()
         w = self.plan.watched
         ratios = self.ratios()
-        failing = ratios > 1.0
-        if self.note:  # the run stopped on an error before it was decided: no equilibrium
-            failing = failing | (w & (ratios >= ratios[w].max()))
+        # a run stopped by an error before it was decided found no equilibrium: failed
+        failed = bool((ratios > 1.0).any()) or bool(self.note)
+        failing = np.zeros(len(ratios), dtype=bool)
+        if failed:  # the blocks that moved with the failure
+            failing = ratios >= FAILING_SHARE
+            if not failing.any():
+                failing = w & (ratios >= ratios[w].max())
         names = [b.name for b in result.scene.blocks]
-        return {"stable": not failing.any(), "movement": float(ratios.max()),
+        return {"stable": not failed, "movement": float(ratios.max()),
                 "max_displacement": float(total[w].max()),
                 "late_displacement": float(late[w].max()),
                 "end_velocity": float(speed[w].max()),
@@ -308,9 +384,10 @@ class StrengthReductionTrial(Study):
     (:func:`dda.studies.reduction.reduced_scene`) as a simulation of ``plan``, and the
     measures of its row: ``stable``, ``movement`` (the largest criterion ratio: 1 or more is
     failed), ``max_displacement``, ``late_displacement`` (m, in the second half),
-    ``end_velocity`` (m/s), ``failing_blocks`` (names), ``trial_time`` (s reached) and
-    ``note`` (why a run stopped early on an error; such a trial counts as failed: no
-    equilibrium was found).
+    ``end_velocity`` (m/s, in the second half), ``failing_blocks`` (a tuple of the names of
+    the blocks that moved with the failure: at least a tenth of their criterion),
+    ``trial_time`` (s reached: a failed trial stops once decided) and ``note`` (why a run
+    stopped early on an error; such a trial counts as failed: no equilibrium was found).
 
     Parameters
     ----------
@@ -499,7 +576,7 @@ def strength_reduction(scene, executor: Executor | None = None, *,
     if not (isinstance(tolerance, (int, float)) and 0.0 < tolerance < 1.0):
         raise ValueError(f"strength_reduction: tolerance must lie in (0, 1), got {tolerance!r}")
     reduced_scene(scene, 1.0)  # every joint's law can be reduced: fail now, not in a worker
-    plan = criterion.plan(scene)
+    plan = criterion.plan(scene, solver)
     study = StrengthReductionTrial(scene, plan, solver)
     k = per_round if per_round is not None else min(_workers(executor), 16)
     if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
