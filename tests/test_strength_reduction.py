@@ -338,3 +338,50 @@ def test_the_trials_run_on_a_dask_cluster_unchanged():
     assert fos.factor == pytest.approx(toppling_factor(**TWO_COLUMNS), rel=0.01)
     assert max(r["round"] for r in fos.trials) >= 1
     assert sum(r["round"] == 1 for r in fos.trials) == 2  # two workers: two a round
+
+
+INCLINE_TOML = """
+# a block on a 1:2 slope, phi 40 degrees: F = tan 40 / 0.5 = 1.6782
+[scene]
+gravity = 9.81
+[materials.rock]
+young = 1e9
+poisson = 0.25
+density = 2500.0
+[joints.default]
+normal_penalty = 1e9
+shear_penalty = 1e9
+friction = { law = "coulomb", phi = 40.0 }
+[[blocks]]
+name = "slope"
+material = "rock"
+fixed = true
+vertices = [[0, 0], [4, 0], [4, 2]]
+[[blocks]]
+name = "block"
+material = "rock"
+vertices = [[2, 1], [2.4, 1.2], [2.2, 1.6], [1.8, 1.4]]
+[simulation]
+dt = 1e-3
+solver = "newton"
+"""
+
+
+def test_the_command_prints_the_factor_and_the_trials(tmp_path, capsys):
+    from dda.cli import main
+
+    scene = tmp_path / "incline.toml"
+    scene.write_text(INCLINE_TOML)
+    png, csv = tmp_path / "fos.png", tmp_path / "trials.csv"
+    assert main(["fos", str(scene), "--workers", "2", "--tolerance", "0.02", "--picture",
+                 str(png), "--csv", str(csv), "--no-progress"]) == 0
+    out = capsys.readouterr().out
+    factor = float(out.split("F = ")[1].split()[0])
+    assert factor == pytest.approx(math.tan(math.radians(40.0)) / 0.5, rel=0.02)
+    assert "failing blocks at F" in out and "block" in out and "round" in out
+    assert png.stat().st_size > 10_000 and csv.read_text().startswith("round,factor,stable")
+    shaken = tmp_path / "shaken.toml"
+    shaken.write_text(INCLINE_TOML + '[[shake]]\nblock = "slope"\n'
+                      'sine = { amplitude = 1.0, frequency = 2.0 }\n')
+    assert main(["fos", str(shaken), "--workers", "1"]) == 2
+    assert "shakes 'slope'" in capsys.readouterr().err

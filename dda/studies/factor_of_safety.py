@@ -12,42 +12,47 @@ a tolerance. Each trial is a :class:`~dda.studies.sweep.Case` run by the sweep r
 **The trial** (:class:`Criterion`). With the fully implicit solver a trial is a *static*
 analysis (the velocity is set to zero at the start of every step, METHOD.md section 2): a
 step then moves a block by ``a dt^2 / 2``, where ``a`` is its unbalanced acceleration
-(out-of-balance force over mass). A stable scene finds its equilibrium in the first steps and
-stops; an unstable one creeps by the same amount every step, however small ``a`` is. With
-legacy DDA a trial is *dynamic* (the scene moves from rest under its weight): its pull-back
-friction does not hold a static trial's long steps (below). The run is ``N`` steps of ``dt``
-(length ``T``), and a free block (not fixed, shaken or moved by a prescribed motion) *fails*
-when
+(out-of-balance force over mass). A stable scene finds its equilibrium and stops; an
+unstable one creeps by the same amount every step, however small ``a`` is, so the last
+step's ``a = 2 dx / dt^2`` measures the out-of-balance force itself. With legacy DDA a trial
+is *dynamic* (the scene moves from rest under its weight): its pull-back friction does not
+hold a static trial's long steps (below). A trial is ``N`` steps of ``dt`` (length ``T =
+N dt``), and a free block (not fixed, shaken or moved by a prescribed motion) *fails* when
 
-1. it moves more than its threshold ``d_b`` during the second half of the run (the first
+1. it moves more than its threshold ``d_b`` during the second half of the trial (the first
    half lets the scene settle on its springs), or
-2. in the second half, its last step moved it faster than ``v_b = d_b / (T / 2)`` (it would
-   cover its threshold in another half run), or
-3. it has moved more than ``10 d_b`` since the start (the outcome is decided).
+2. at the end, its last step's rate exceeds the end threshold: static, the unbalanced
+   acceleration ``2 dx / dt^2 > a_min = resolution g`` (1e-3 g); dynamic, the speed
+   ``dx / dt > v_b = d_b / (T / 2)`` (it would cover its threshold in another half trial),
+   or
+3. it has moved more than ``10 d_b`` since the start.
 
-A trial stops as soon as one block fails; the blocks listed as failing are those that had
-moved at least a tenth of their criterion by then (the mechanism). ``d_b`` is
+A trial stops as soon as (1) or (3) decides it; the blocks listed as failing are those that
+had moved at least a tenth of their criterion by then (the mechanism). ``d_b`` is
 ``displacement_ratio`` (1%) of the block's size (the square root of its area) unless an
 absolute ``displacement`` is given; a movement is the largest displacement of the block's
-vertices. For a block creeping at a steady rate (1) and (2) are the same test. The smallest
-unbalanced acceleration a trial detects is ``a_min = 4 d / (N dt^2)`` (static) or ``8 d / (3
-T^2)`` (dynamic, from rest), and the default run makes it ``resolution`` (1e-3) times
-gravity for the smallest free block::
+vertices. A static trial counts only its full-length steps (steps cut while the contacts
+settle do not count; it may run ``SETTLE_ALLOWANCE`` (10) times ``T`` to make them): its
+second half starts after ``N / 2`` of them. The smallest unbalanced acceleration the
+displacement test (1) detects is ``4 d / (N dt^2)`` (static) or ``8 d / (3 T^2)`` (dynamic,
+from rest); the default trial makes it ``a_min`` for the smallest free block::
 
     static:   dt = sqrt(4 d_min / (N a_min)),   T = N dt     (N = 40 steps)
     dynamic:  T = sqrt(8 d_min / (3 a_min)),    dt = T / N   (N = 200 steps)
 
-A static ``dt`` is not a time step of any motion, but the simulation warns above 100 contact
-periods (:func:`dda.plausibility.check_time_step`), so it is capped at 50 periods of the
-lightest free block on the stiffest joint, with more steps for the same ``a_min``. On the two
-toppling columns of the tests (1 m blocks, 10 GN/m) that is 166 steps of 0.157 s instead of
-40 of 0.319 s: the same factor (1.298), 0.64 s of CPU for the 12 trials instead of 0.28 s.
+so that for a block creeping at a steady rate (1) and (2) are the same test. A static ``dt``
+is not a time step of any motion, but the simulation warns above 100 contact periods
+(:func:`dda.plausibility.check_time_step`), so it is capped at 50 periods of the lightest
+free block on the stiffest joint; test (2) keeps the resolution. On the two toppling columns
+of the tests (1 m blocks, 10 GN/m) that is 40 steps of 0.157 s instead of 0.319 s: the same
+factor (1.298).
 
 **Resolution.** Near the factor of safety ``F*`` the out-of-balance force is small: a block on
 an incline of ``theta`` at ``F = F* (1 + delta)`` has ``a = g sin(theta) delta / (1 +
 delta)``. A trial calls it stable while ``a < a_min``, so the search may place ``F`` above
 ``F*`` by up to ``delta = resolution / sin(theta)``, 0.24% at 25 degrees with the default
-1e-3; a finer ``resolution`` costs a longer (dynamic) or more-stepped (static) trial.
+1e-3; a finer ``resolution`` costs a longer dynamic trial (a static one tests it at its
+last step).
 Measured on a 0.5 m block on a 25 degree incline, phi 30 (``F* = 1.2381``), one trial at
 ``F* (1 + delta)``:
 
@@ -55,20 +60,21 @@ Measured on a 0.5 m block on a 25 degree incline, phi 30 (``F* = 1.2381``), one 
 criterion ratio at delta    -1% and -0.1%  +0.1%      +0.2%      +0.3%      cost/trial
 ==========================  =============  =========  =========  =========  ==========
 static, Newton or legacy    0.0002         0.42       0.84       1.26 fail  10 ms (40)
-dynamic, Newton             0.0003-0.0016  0.65       1.00 fail  1.01 fail  31 ms (200)
-dynamic, legacy             0.0002         0.47       0.93       1.01 fail  28 ms (200)
+dynamic, Newton             0.0003-0.0016  0.65       1.21 fail  1.60 fail  31 ms (200)
+dynamic, legacy             0.0002         0.47       0.93       1.43 fail  28 ms (200)
 ==========================  =============  =========  =========  =========  ==========
 
 The static ratio grows linearly, 0.42 per 0.1%: it crosses 1 at ``delta = 0.237%``, the
 designed ``1e-3 / sin 25``. A stable trial settles to 2e-4 (the elastic settling on the
-springs, counted by criterion 3). The search then finds ``F = 1.244`` (+0.46%) with every
-solver and analysis. On the two toppling columns of the tests, legacy DDA's static trials
-went wrong: at ``F = 1.2`` (Goodman and Bray's 1.3034) the slender column turned by 28 mrad
-against a square that stood still, OPEN-CLOSE not settling 18 times, and the search gave
-1.192 (-8.6%), not monotonic in ``F``; its dynamic trials give 1.298 (-0.40%), as do
-Newton's static and dynamic ones. Hence ``analysis="auto"``: static for Newton (a third of
-the cost, and clearer: a stable trial settles to 2e-4 of the criterion, a dynamic one to up
-to 2e-3 on the incline and 5e-3 on the columns), dynamic for legacy DDA.
+springs, counted by test 3); its last step's unbalanced acceleration is 1e-15 g. The search
+then finds ``F = 1.244`` (+0.46%) with every solver and analysis. On the two toppling
+columns of the tests, legacy DDA's static trials went wrong: at ``F = 1.2`` (Goodman and
+Bray's 1.3034) the slender column turned by 28 mrad against a square that stood still,
+OPEN-CLOSE not settling 18 times, and the search gave 1.192 (-8.6%), not monotonic in
+``F``; its dynamic trials give 1.298 (-0.40%), as do Newton's static and dynamic ones.
+Hence ``analysis="auto"``: static for Newton (a third of the cost, and clearer: a stable
+trial settles to 2e-4 of the criterion, a dynamic one to up to 2e-3 on the incline and 5e-3
+on the columns), dynamic for legacy DDA.
 
 **The search.** Round 0 runs ``per_round`` factors spread geometrically over ``bracket``
 (ends included, at least the two ends); while every trial is stable (or every one failed)
@@ -106,6 +112,11 @@ GROSS_MOVEMENT = 10.0
 #: tests they stood at 0.48 to 1.0 when the first one crossed 1, at F 0.75% above F*; standing
 #: blocks settle to about 1e-4)
 FAILING_SHARE = 0.1
+#: a static trial may run this many times its nominal length (``steps dt``) to make its
+#: full-length steps: steps cut while the contacts settle do not count (the 313-block slope
+#: of ``examples/jointed_slope.py`` settled in 0.86 s of pseudo time at 0.02 s steps, 2,460
+#: steps mostly of 4e-5 to 6e-4 s)
+SETTLE_ALLOWANCE = 10.0
 #: the default steps of a trial, per analysis
 DEFAULT_STEPS = {"static": 40, "dynamic": 200}
 
@@ -123,14 +134,16 @@ class Criterion:
         with the fully implicit solver, dynamic with legacy DDA (whose pull-back friction
         does not hold a static trial's long steps; module docstring).
     resolution : float
-        The smallest unbalanced acceleration a trial must detect, as a fraction of gravity;
-        it sets the default run (``dt`` static, the duration dynamic).
+        The smallest unbalanced acceleration a trial must detect, as a fraction of gravity:
+        a static trial's end test, and what sets a dynamic trial's duration.
     displacement_ratio : float
         A block's threshold ``d_b`` as a fraction of its size (square root of its area).
     displacement : float, optional
         One threshold (m) for every block instead.
     velocity : float, optional
-        The end speed (m/s) above which a block fails; default ``d_b / (T / 2)``.
+        Dynamic trials: the end speed (m/s) above which a block fails; default ``d_b / (T /
+        2)``. (A static trial tests its last step's unbalanced acceleration against
+        ``resolution`` instead.)
     steps : int, optional
         Steps of a trial (default 40 static, 200 dynamic).
     duration : float, optional
@@ -178,6 +191,13 @@ class Criterion:
 
         analysis = analysis_for(self.analysis, solver)
         scene.validate()
+        if scene.shakes:
+            names = ", ".join(repr(scene.blocks[sh.block].name) for sh in scene.shakes)
+            raise ValueError(
+                f"strength_reduction: the scene shakes {names}; the factor of safety by "
+                "strength reduction is that of a scene under its weight and steady loads, "
+                "which a trial judges by whether its blocks come to rest: take the shaking "
+                "out (a pseudo-static seismic load can be a point load k W on each block)")
         model = Model(scene)
         watched = model.free.copy()
         for m in scene.motions:  # a block moved by springs is driven, not failing
@@ -192,27 +212,28 @@ class Criterion:
             threshold = self.displacement_ratio * size
         d_min = float(threshold[watched].min())
         steps = int(self.steps or DEFAULT_STEPS[analysis])
+        if self.duration is None and not scene.gravity > 0.0:
+            raise ValueError("strength_reduction: a scene without gravity has no "
+                             "acceleration to set the trial's length by; give "
+                             "Criterion(duration=...)")
+        a_min = self.resolution * scene.gravity
         if self.duration is not None:
             duration = float(self.duration)
+        elif analysis == "static":  # capped: the rate test below keeps the resolution
+            duration = steps * min(math.sqrt(4.0 * d_min / (steps * a_min)), _step_cap(model))
         else:
-            if not scene.gravity > 0.0:
-                raise ValueError("strength_reduction: a scene without gravity has no "
-                                 "acceleration to set the trial's length by; give "
-                                 "Criterion(duration=...)")
-            a_min = self.resolution * scene.gravity
-            if analysis == "static":
-                dt = math.sqrt(4.0 * d_min / (steps * a_min))
-                cap = _step_cap(model)
-                if self.steps is None and dt > cap:  # more, shorter steps: same resolution
-                    dt = cap
-                    steps = max(steps, math.ceil(4.0 * d_min / (a_min * dt * dt)))
-                duration = steps * dt
-            else:
-                duration = math.sqrt(8.0 * d_min / (3.0 * a_min))
+            duration = math.sqrt(8.0 * d_min / (3.0 * a_min))
         dt = duration / steps
-        speed = (np.full(len(size), float(self.velocity)) if self.velocity is not None
-                 else threshold / (0.5 * duration))
-        return TrialPlan(self, analysis, dt, duration, steps, watched, threshold, speed)
+        if not a_min > 0.0:  # no gravity: what the displacement test resolves
+            a_min = (4.0 * d_min / (steps * dt * dt) if analysis == "static"
+                     else 8.0 * d_min / (3.0 * duration ** 2))
+        if analysis == "static":  # the last step's unbalanced acceleration 2 dx / dt^2
+            rate = np.full(len(size), a_min)
+        elif self.velocity is not None:
+            rate = np.full(len(size), float(self.velocity))
+        else:
+            rate = threshold / (0.5 * duration)
+        return TrialPlan(self, analysis, dt, duration, steps, watched, threshold, rate)
 
 
 def analysis_for(analysis: str, solver) -> str:
@@ -255,8 +276,9 @@ class TrialPlan:
         The blocks the criterion judges (free, not moved by a prescribed motion).
     threshold : (n_blocks,) float
         ``d_b`` (m).
-    speed : (n_blocks,) float
-        ``v_b`` (m/s).
+    rate : (n_blocks,) float
+        The end rate above which a block fails: static, the unbalanced acceleration ``a_min``
+        (m/s^2); dynamic, the speed ``v_b`` (m/s).
     """
 
     criterion: Criterion
@@ -266,7 +288,7 @@ class TrialPlan:
     steps: int
     watched: np.ndarray
     threshold: np.ndarray
-    speed: np.ndarray
+    rate: np.ndarray
 
     def describe(self) -> str:
         """One line: the run and the thresholds."""
@@ -276,26 +298,36 @@ class TrialPlan:
                 else f"{c.displacement:g} m")
         span = f"{d.min():.3g} m" if np.ptp(d) <= 1e-12 * d.max() else \
             f"{d.min():.3g} to {d.max():.3g} m"
+        if self.analysis == "static":
+            end = (f"or its last step's unbalanced acceleration exceeds "
+                   f"{self.rate[self.watched].min():.3g} m/s2")
+        else:
+            end = "or it ends faster than that per half run"
         return (f"{self.analysis} trials of {self.steps} steps of {self.dt:.4g} s; a free "
                 f"block fails when it moves more than {what} ({span}) in the second half, "
-                f"more than {GROSS_MOVEMENT:g} times that in all, or ends faster than that "
-                "per half run")
+                f"more than {GROSS_MOVEMENT:g} times that in all, {end}")
 
 
 # ---------------------------------------------------------------------- one trial
 class _Decided(SimulationError):
-    """Raised by the trial's watch to end a run whose outcome is known (a block failed)."""
+    """Raised by the trial's watch to end a run whose outcome is known."""
 
 
 class _Watch:
-    """Follows a trial's committed steps: how far each block has moved, in the second half,
-    and in the last step; raises :class:`_Decided` once a block fails."""
+    """Follows a trial's committed steps: how far each block has moved, in the second half
+    and in the last step; raises :class:`_Decided` once a block fails, or (static) once the
+    trial has made its steps at full length.
+
+    A static trial counts the steps taken at its full ``dt`` (steps cut while the contacts
+    settle do not count): its second half starts after ``steps / 2`` of them, it ends after
+    ``steps``. A dynamic trial's second half starts at half its duration."""
 
     def __init__(self, x0, offsets, plan: TrialPlan):
         self.x0 = x0
         self.starts = offsets[:-1]
         self.plan = plan
-        self.settle = 0.5 * plan.duration
+        self.static = plan.analysis == "static"
+        self.full = 0  # steps at full length (static)
         self.x_settle = None
         self.x_prev, self.t_prev = x0, 0.0
         self.x_last, self.t_last = x0, 0.0
@@ -309,38 +341,49 @@ class _Watch:
     def __call__(self, state, report):
         self.x_prev, self.t_prev = self.x_last, self.t_last
         self.x_last, self.t_last = state.x.copy(), float(state.time)
-        if self.x_settle is None and self.t_last >= self.settle * (1.0 - 1e-9):
+        plan = self.plan
+        if self.static:
+            self.full += self.t_last - self.t_prev >= plan.dt * (1.0 - 1e-9)
+            second_half = self.full >= plan.steps // 2
+        else:
+            second_half = self.t_last >= 0.5 * plan.duration * (1.0 - 1e-9)
+        if self.x_settle is None and second_half:
             self.x_settle = self.x_last
-        if self.failing().any():
+        if (self.ratios(rate=False) > 1.0).any():
             raise _Decided("a block failed")
+        if self.static and self.full >= plan.steps:
+            raise _Decided("the trial made its steps")
 
-    def movements(self):
-        """Per block: total movement, movement in the second half, speed in the last step
-        (zero in the first half: the first steps' settling on the springs is no failure)."""
+    def movements(self, rate=True):
+        """Per block: total movement, movement in the second half, and the rate of the last
+        step (static: its unbalanced acceleration ``2 dx / dt^2``; dynamic: its speed),
+        zero in the first half (the first steps' settling on the springs is no failure) and
+        when ``rate`` is False."""
         total = self._moved(self.x_last, self.x0)
         late = (np.zeros_like(total) if self.x_settle is None
                 else self._moved(self.x_last, self.x_settle))
         span = self.t_last - self.t_prev
-        if self.x_settle is None or span <= 0.0:  # the first half settles: no speed judged
-            speed = np.zeros_like(total)
+        if not rate or self.x_settle is None or span <= 0.0:
+            end = np.zeros_like(total)
+        elif self.static:
+            end = 2.0 * self._moved(self.x_last, self.x_prev) / (span * span)
         else:
-            speed = self._moved(self.x_last, self.x_prev) / span
-        return total, late, speed
+            end = self._moved(self.x_last, self.x_prev) / span
+        return total, late, end
 
-    def ratios(self):
-        """Per block, the largest of the three criterion ratios (1 or more: failed)."""
-        total, late, speed = self.movements()
+    def ratios(self, rate=True):
+        """Per block, the largest of the criterion ratios (1 or more: failed); the end rate's
+        only with ``rate`` (it is judged at the end: a step's rate while the scene still
+        settles is no failure)."""
+        total, late, end = self.movements(rate)
         p = self.plan
-        r = np.maximum.reduce([late / p.threshold, speed / p.speed,
+        r = np.maximum.reduce([late / p.threshold, end / p.rate,
                                total / (GROSS_MOVEMENT * p.threshold)])
         return np.where(p.watched, r, 0.0)
 
-    def failing(self):
-        return self.ratios() > 1.0
-
     def measures(self, result) -> dict:
         """The trial's row (the sweep's ``error`` callable)."""
-        total, late, speed = self.movements()
+        total, late, rate = self.movements()
         w = self.plan.watched
         ratios = self.ratios()
         # a run stopped by an error before it was decided found no equilibrium: failed
@@ -354,7 +397,7 @@ class _Watch:
         return {"stable": not failed, "movement": float(ratios.max()),
                 "max_displacement": float(total[w].max()),
                 "late_displacement": float(late[w].max()),
-                "end_velocity": float(speed[w].max()),
+                "end_rate": float(rate[w].max()),
                 "failing_blocks": tuple(names[i] for i in np.flatnonzero(failing)),
                 "trial_time": self.t_last, "note": self.note}
 
@@ -384,7 +427,8 @@ class StrengthReductionTrial(Study):
     (:func:`dda.studies.reduction.reduced_scene`) as a simulation of ``plan``, and the
     measures of its row: ``stable``, ``movement`` (the largest criterion ratio: 1 or more is
     failed), ``max_displacement``, ``late_displacement`` (m, in the second half),
-    ``end_velocity`` (m/s, in the second half), ``failing_blocks`` (a tuple of the names of
+    ``end_rate`` (static: the last step's unbalanced acceleration, m/s^2; dynamic: its speed,
+    m/s; in the second half), ``failing_blocks`` (a tuple of the names of
     the blocks that moved with the failure: at least a tenth of their criterion),
     ``trial_time`` (s reached: a failed trial stops once decided) and ``note`` (why a run
     stopped early on an error; such a trial counts as failed: no equilibrium was found).
@@ -411,9 +455,13 @@ class StrengthReductionTrial(Study):
         scene = reduced_scene(self.scene, factor)
         solver = (make_solver(self.solver) if isinstance(self.solver, str)
                   else copy.deepcopy(self.solver))
-        sim = _TrialSimulation(scene, self.plan, dt=self.plan.dt, solver=solver,
-                               analysis=self.plan.analysis)
-        return sim, self.plan.duration, sim.watch.measures
+        plan = self.plan
+        sim = _TrialSimulation(scene, plan, dt=plan.dt, solver=solver,
+                               analysis=plan.analysis)
+        # a static trial ends after its full-length steps (the watch), given time to settle
+        length = SETTLE_ALLOWANCE * plan.duration if plan.analysis == "static" else \
+            plan.duration
+        return sim, length, sim.watch.measures
 
 
 # ---------------------------------------------------------------------- the result
