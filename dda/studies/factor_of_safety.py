@@ -31,11 +31,12 @@ A trial stops as soon as (1) or (3) decides it; the blocks listed as failing are
 had moved at least a tenth of their criterion by then (the mechanism). ``d_b`` is
 ``displacement_ratio`` (1%) of the block's size (the square root of its area) unless an
 absolute ``displacement`` is given; a movement is the largest displacement of the block's
-vertices. A static trial counts only its full-length steps (steps cut while the contacts
-settle do not count; it may run ``SETTLE_ALLOWANCE`` (10) times ``T`` to make them): its
-second half starts after ``N / 2`` of them. The smallest unbalanced acceleration the
-displacement test (1) detects is ``4 d / (N dt^2)`` (static) or ``8 d / (3 T^2)`` (dynamic,
-from rest); the default trial makes it ``a_min`` for the smallest free block::
+vertices. A static trial counts only its steps of a quarter of ``dt`` or more (the far
+shorter steps taken while the contacts settle do not count; it may run ``SETTLE_ALLOWANCE``
+(10) times ``T`` to make them): its second half starts after ``N / 2`` of them. The
+smallest unbalanced acceleration the displacement test (1) detects is ``4 d / (N dt^2)``
+(static) or ``8 d / (3 T^2)`` (dynamic, from rest); the default trial makes it ``a_min``
+for the smallest free block::
 
     static:   dt = sqrt(4 d_min / (N a_min)),   T = N dt     (N = 40 steps)
     dynamic:  T = sqrt(8 d_min / (3 a_min)),    dt = T / N   (N = 200 steps)
@@ -117,6 +118,10 @@ FAILING_SHARE = 0.1
 #: of ``examples/jointed_slope.py`` settled in 0.86 s of pseudo time at 0.02 s steps, 2,460
 #: steps mostly of 4e-5 to 6e-4 s)
 SETTLE_ALLOWANCE = 10.0
+#: a static trial's step counts when it is at least this share of the trial's dt: the step
+#: control may hold a step at half its size for good (the two columns of the tests near F*:
+#: 800 steps of dt / 2 in a trial of 40), while settling steps are far shorter
+FULL_STEP = 0.25
 #: the default steps of a trial, per analysis
 DEFAULT_STEPS = {"static": 40, "dynamic": 200}
 
@@ -318,9 +323,10 @@ class _Watch:
     and in the last step; raises :class:`_Decided` once a block fails, or (static) once the
     trial has made its steps at full length.
 
-    A static trial counts the steps taken at its full ``dt`` (steps cut while the contacts
-    settle do not count): its second half starts after ``steps / 2`` of them, it ends after
-    ``steps``. A dynamic trial's second half starts at half its duration."""
+    A static trial counts the steps of at least ``FULL_STEP`` (a quarter) of its ``dt``
+    (the far shorter steps taken while the contacts settle do not count): its second half
+    starts after ``steps / 2`` of them, it ends after ``steps``. A dynamic trial's second
+    half starts at half its duration."""
 
     def __init__(self, x0, offsets, plan: TrialPlan):
         self.x0 = x0
@@ -343,7 +349,7 @@ class _Watch:
         self.x_last, self.t_last = state.x.copy(), float(state.time)
         plan = self.plan
         if self.static:
-            self.full += self.t_last - self.t_prev >= plan.dt * (1.0 - 1e-9)
+            self.full += self.t_last - self.t_prev >= FULL_STEP * plan.dt * (1.0 - 1e-9)
             second_half = self.full >= plan.steps // 2
         else:
             second_half = self.t_last >= 0.5 * plan.duration * (1.0 - 1e-9)
