@@ -385,3 +385,19 @@ def test_the_command_prints_the_factor_and_the_trials(tmp_path, capsys):
                       'sine = { amplitude = 1.0, frequency = 2.0 }\n')
     assert main(["fos", str(shaken), "--workers", "1"]) == 2
     assert "shakes 'slope'" in capsys.readouterr().err
+
+
+def test_the_toppling_columns_example(tmp_path, capsys):
+    """examples/toppling_columns.py as a user runs it (a process pool, one worker a core)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "toppling_columns.py"
+    spec = importlib.util.spec_from_file_location("toppling_columns", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    fos, expected = example.main(["--out", str(tmp_path)])
+    assert fos.factor == pytest.approx(expected, rel=0.01)
+    assert "Goodman and Bray: F = 1.3034" in capsys.readouterr().out
+    assert (tmp_path / "fos.png").stat().st_size > 10_000
+    assert (tmp_path / "trials.csv").exists()
