@@ -214,6 +214,26 @@ def test_the_search_widens_the_bracket_and_says_when_it_hits_its_limits(rock):
         assert fos.factor == math.inf and fos.bracket == (8.0, math.inf)
         assert "stable at every factor" in fos.notes[-1]
         assert fos.failing_blocks == []
+        # nor one on a 25 degree incline at phi 2 (F* = 0.075) below the limits
+        slippery, _, _ = incline_scene(2.0, slope_deg=25.0)
+        fos = dda.studies.strength_reduction(slippery, executor=pool, limits=(0.1, 8.0))
+        assert math.isnan(fos.factor) and fos.bracket == (0.0, 0.1)
+        assert "failed at every factor" in fos.notes[-1]
+        assert [b.name for b in fos.failing_blocks] == ["top"]
+
+
+@pytest.mark.parametrize("per_round", [1, 3])
+def test_a_k_section_runs_per_round_trials_a_round(per_round):
+    scene, top, _ = incline_scene(30.0, slope_deg=25.0)
+    with ThreadPoolExecutor(1) as pool:
+        fos = dda.studies.strength_reduction(scene, executor=pool, per_round=per_round)
+    assert fos.factor == pytest.approx(1.2381, rel=0.02)
+    later = [sum(r["round"] == k for r in fos.trials) for k in range(1, fos.rounds)]
+    assert set(later) == {per_round}
+    assert sum(r["round"] == 0 for r in fos.trials) == max(2, per_round)
+    # each round divides the bracket's log width by per_round + 1, from ln 8 to ln 1.01
+    shrink = math.log(math.log(8.0) / math.log(1.01)) / math.log(per_round + 1)
+    assert fos.rounds == 1 + math.ceil(shrink) == {1: 9, 3: 5}[per_round]
 
 
 def test_bad_arguments_are_refused_with_their_name():
