@@ -32,6 +32,7 @@ The scene's water, bolts, loads and other effects are not touched: only the join
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 import warnings
@@ -47,6 +48,19 @@ __all__ = ["ReducedBartonBandis", "reduce_friction", "reduced_joint", "reduced_s
 def _reduced_angle(phi: float, factor: float) -> float:
     """``atan(tan(phi) / factor)`` in degrees."""
     return math.degrees(math.atan(math.tan(math.radians(phi)) / factor))
+
+
+@contextlib.contextmanager
+def _meant(*angles):
+    """Silence the plausibility check for weak reduced angles (below 1.57 degrees they look
+    like radians to it; they are meant), and only for them: ``warnings.catch_warnings``
+    changes the process's filters, which threads share."""
+    if not any(0.0 < a < 0.5 * math.pi for a in angles):
+        yield
+        return
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", PlausibilityWarning)
+        yield
 
 
 def _check_factor(factor) -> float:
@@ -143,24 +157,23 @@ def reduce_friction(law: FrictionLaw, factor: float) -> FrictionLaw:
     """
     f = _check_factor(factor)
     reduced = getattr(law, "reduced", None)
-    with warnings.catch_warnings():
-        # a weak reduced angle (below 1.57 degrees) looks like radians to the plausibility
-        # check; it is meant
-        warnings.simplefilter("ignore", PlausibilityWarning)
-        if callable(reduced):
-            out = reduced(f)
-            if not isinstance(out, FrictionLaw):
-                raise TypeError(f"{type(law).__name__}.reduced({f:g}) returned {out!r}, not a "
-                                "FrictionLaw")
-            return out
-        kind = type(law)
-        if kind is CoulombSingle:
-            return CoulombSingle(phi=_reduced_angle(law.phi, f), cohesion=law.cohesion / f)
-        if kind is StaticDynamicTransition:
-            return StaticDynamicTransition(_reduced_angle(law.phi_static, f),
-                                           _reduced_angle(law.phi_dynamic, f), onset=law.onset)
-        if kind is BartonBandis:
-            return ReducedBartonBandis(**_barton_parameters(law), factor=f)
+    if callable(reduced):
+        out = reduced(f)
+        if not isinstance(out, FrictionLaw):
+            raise TypeError(f"{type(law).__name__}.reduced({f:g}) returned {out!r}, not a "
+                            "FrictionLaw")
+        return out
+    kind = type(law)
+    if kind is CoulombSingle:
+        phi = _reduced_angle(law.phi, f)
+        with _meant(phi):
+            return CoulombSingle(phi=phi, cohesion=law.cohesion / f)
+    if kind is StaticDynamicTransition:
+        phi_s, phi_d = _reduced_angle(law.phi_static, f), _reduced_angle(law.phi_dynamic, f)
+        with _meant(phi_s, phi_d):
+            return StaticDynamicTransition(phi_s, phi_d, onset=law.onset)
+    if kind is BartonBandis:
+        return ReducedBartonBandis(**_barton_parameters(law), factor=f)
     raise TypeError(
         f"strength reduction does not know how to weaken the friction law {law!r} "
         f"({kind.__module__}.{kind.__qualname__}); give its class a method "
