@@ -99,6 +99,9 @@ class ReducedBartonBandis(BartonBandis):
     (0.595877, 50.0)
     """
 
+    #: not registered: a scene as data names it by its import path
+    name = "reduced_barton"
+
     def __init__(self, jrc: float, jcs: float, phi_r: float, mobilized: bool = True,
                  slip_at_peak: float | None = None, block_size: float | None = None,
                  dilation: bool = False, max_angle: float = 70.0, factor: float = 1.0):
