@@ -304,6 +304,27 @@ def test_toppling_columns_against_goodman_bray(solver):
     assert {b.name for b in fos.failing_blocks} == {"column1", "column2"}
 
 
+def test_auto_penalties_cap_the_static_step_as_given_ones_do():
+    """With "auto" penalties the static step is capped at the contact period of the penalty
+    the simulation will choose (2 x E = 2e10 N/m here: 40 steps of 0.111 s): 1.309 against
+    1.3034 (+0.43%). Uncapped (0.319 s, 144 periods) a trial at 1.293 moved the column 46 mm
+    into the base's step and stopped on an untracked penetration: F 1.287."""
+    import warnings
+
+    scene = columns_scene(**TWO_COLUMNS)
+    for pair, joint in scene.pair_joints.items():
+        scene.set_joint(JointMaterial("auto", "auto", joint.friction), between=pair)
+    scene.set_joint(JointMaterial("auto", "auto", scene.default_joint.friction))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", dda.PlausibilityWarning)
+        with ThreadPoolExecutor(2) as pool:
+            fos = dda.studies.strength_reduction(scene, executor=pool)
+    # 50 periods of the square (2500 kg) on 2e10 N/m
+    assert fos.plan.dt == pytest.approx(50 * 2 * math.pi * math.sqrt(2500 / 2e10))
+    assert fos.factor == pytest.approx(toppling_factor(**TWO_COLUMNS), rel=0.01)
+    assert fos.notes == []
+
+
 H4, B4 = [0.6, 1.2, 1.8, 1.5], [0.0, 0.1, 0.2, 0.3]
 H5, B5 = [0.6, 1.0, 1.4, 1.8, 1.5], [0.0, 0.05, 0.1, 0.15, 0.2]
 

@@ -225,7 +225,8 @@ class Criterion:
         if self.duration is not None:
             duration = float(self.duration)
         elif analysis == "static":  # capped: the rate test below keeps the resolution
-            duration = steps * min(math.sqrt(4.0 * d_min / (steps * a_min)), _step_cap(model))
+            dt = math.sqrt(4.0 * d_min / (steps * a_min))
+            duration = steps * min(dt, _step_cap(model, dt))
         else:
             duration = math.sqrt(8.0 * d_min / (3.0 * a_min))
         dt = duration / steps
@@ -254,14 +255,18 @@ def analysis_for(analysis: str, solver) -> str:
     return "dynamic" if legacy else "static"
 
 
-def _step_cap(model) -> float:
+def _step_cap(model, dt: float) -> float:
     """The longest static step: ``DT_PERIODS / 2`` contact periods ``2 pi sqrt(m / p)`` of
     the lightest free block on the stiffest joint (:func:`dda.plausibility.check_time_step`
-    warns at ``DT_PERIODS``); no cap when every penalty is "auto"."""
+    warns at ``DT_PERIODS``). An "auto" penalty is the one the simulation would choose at
+    ``dt`` (:func:`dda.auto_settings.choose`; at the capped step it is the same or, by the
+    inertia rule, smaller than a 2,000th of it)."""
     penalties = np.asarray(model.joints.normal_penalty, dtype=float)
-    penalties = penalties[np.isfinite(penalties)]
-    if len(penalties) == 0:
-        return math.inf
+    if np.isnan(penalties).any():
+        from dda.auto_settings import choose
+
+        auto = choose(model, None, dt, auto_penalty=True).normal_penalty
+        penalties = np.where(np.isnan(penalties), auto, penalties)
     mass = (model.density * model.size ** 2)[model.free].min()
     return 0.5 * DT_PERIODS * 2.0 * math.pi * math.sqrt(mass / penalties.max())
 
