@@ -259,8 +259,8 @@ def _step_cap(model, dt: float) -> float:
     """The longest static step: ``DT_PERIODS / 2`` contact periods ``2 pi sqrt(m / p)`` of
     the lightest free block on the stiffest joint (:func:`dda.plausibility.check_time_step`
     warns at ``DT_PERIODS``). An "auto" penalty is the one the simulation would choose at
-    ``dt`` (:func:`dda.auto_settings.choose`; at the capped step it is the same or, by the
-    inertia rule, smaller than a 2,000th of it)."""
+    ``dt`` (:func:`dda.auto_settings.choose`; at the capped step its inertia rule, ``6 m /
+    dt^2``, comes to ``6 / (100 pi)^2`` of that penalty, so the choice stands)."""
     penalties = np.asarray(model.joints.normal_penalty, dtype=float)
     if np.isnan(penalties).any():
         from dda.auto_settings import choose
