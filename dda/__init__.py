@@ -23,3 +23,13 @@ from dda.simulation import (  # noqa: E402
 __all__ = ["Block", "OverlapError", "PenaltyWarning", "PlausibilityWarning", "Result", "Scene",
            "Simulation", "SimulationError", "io", "load_scene"]
 __version__ = "0.1.0"
+
+
+def __getattr__(name):
+    # dda.studies (sweeps, the factor of safety: dda.studies.strength_reduction) is imported
+    # on first use, so that ``import dda`` does not load the sweep runner
+    if name == "studies":
+        import importlib
+
+        return importlib.import_module("dda.studies")
+    raise AttributeError(f"module 'dda' has no attribute {name!r}")

@@ -6,6 +6,8 @@ scene.
     dda render OUT/case.pvd [--png FILE] [--gif FILE] [--mp4 FILE] [--field NAME] [--frame N]
                             [--relative-to BLOCK|auto|none]
     dda info SCENE.toml
+    dda fos SCENE.toml [--tolerance T] [--analysis auto|static|dynamic] [--workers N]
+                       [--picture FILE] [--csv FILE]
 """
 
 from __future__ import annotations
@@ -193,6 +195,37 @@ def cmd_info(args):
     return 0
 
 
+def cmd_fos(args):
+    """``dda fos SCENE.toml``: the factor of safety by strength reduction, its trials."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from dda.io.scene_file import load_scene
+    from dda.studies.factor_of_safety import Criterion, strength_reduction
+
+    loaded = load_scene(args.scene)
+    criterion = Criterion(analysis=args.analysis, resolution=args.resolution,
+                          displacement_ratio=args.displacement_ratio)
+    workers = args.workers or None
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        try:
+            fos = strength_reduction(loaded.scene, executor=pool, criterion=criterion,
+                                     tolerance=args.tolerance, solver=loaded.solver,
+                                     per_round=workers, progress=_progress(args))
+        except TypeError as exc:  # a friction law without a reduction, a scene not to pickle
+            raise ValueError(str(exc)) from None
+    print(fos)
+    print(fos.trials.table(["round", "factor", "stable", "movement", "max_displacement",
+                            "failing_blocks", "trial_time", "steps", "cpu_time"]))
+    if args.picture:
+        fos.picture(args.picture)
+        print(f"wrote {args.picture}")
+    if args.csv:
+        from dda.studies.sweep import write_csv
+
+        print(f"wrote {write_csv(fos.trials, args.csv)}")
+    return 0
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="dda", description="2D Discontinuous Deformation "
                                  "Analysis: run scene files, render their output.")
@@ -230,6 +263,25 @@ def main(argv=None) -> int:
     p.add_argument("--frame", type=int, default=-1, help="frame of the PNG (default last)")
     p.add_argument("--fps", type=float, default=10.0)
     p.set_defaults(func=cmd_render)
+    p = sub.add_parser("fos", help="the factor of safety of a scene by strength reduction "
+                       "of its joints (dda.studies.strength_reduction)")
+    p.add_argument("scene", help="SCENE.toml (its [simulation] solver is used; its dt and "
+                   "duration are not: each trial makes its own)")
+    p.add_argument("--tolerance", type=float, default=0.01,
+                   help="relative width of the final bracket (default 0.01)")
+    p.add_argument("--analysis", choices=["auto", "static", "dynamic"], default="auto",
+                   help="the trials' analysis (default: static with newton, dynamic with "
+                   "legacy)")
+    p.add_argument("--resolution", type=float, default=1e-3,
+                   help="smallest unbalanced acceleration a trial detects, in g (1e-3)")
+    p.add_argument("--displacement-ratio", type=float, default=0.01,
+                   help="a block fails when it moves this share of its size (0.01)")
+    p.add_argument("--workers", type=int, default=0,
+                   help="worker processes, and trials a round (default: one a core)")
+    p.add_argument("--picture", help="write the picture (scene and trials) to this file")
+    p.add_argument("--csv", help="write the trials to this CSV file")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=cmd_fos)
     p = sub.add_parser("info", help="blocks, contacts, effects and estimated cost of a scene")
     p.add_argument("scene")
     p.set_defaults(func=cmd_info)

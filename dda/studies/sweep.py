@@ -83,7 +83,7 @@ class Study(ABC):
 
         ``error`` returns the relative error against the study's reference (0.01 is 1%), or
         a dict with that under ``"error"`` and other measures beside it (they become columns
-        of the row).
+        of the row: numbers as floats; True/False, text and tuples as they are).
         """
 
     def __repr__(self):
@@ -152,7 +152,7 @@ def _run_case(case: Case) -> dict:
         measures = {"error": measures}
     st = result.stats
     row = {"study": case.study.name, **case.settings,
-           **{k: float(v) for k, v in measures.items()}, "cpu_time": cpu,
+           **{k: _measure(v) for k, v in measures.items()}, "cpu_time": cpu,
            "wall_time": wall, "steps": len(st), "iterations": int(st["iterations"].sum()),
            "open_close_passes": int(st["open_close_passes"].sum()),
            "solves": int(st["solves"].sum()), "dt_cuts": len(st.cuts),
@@ -160,6 +160,16 @@ def _run_case(case: Case) -> dict:
     for name in SECTIONS:
         row[f"{name}_time"] = float(st[f"{name}_time"].sum())
     return row
+
+
+def _measure(value):
+    """A measure as a row keeps it: a number as a float; True/False, text and tuples (of
+    names, say) as they are."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (str, tuple)):
+        return value
+    return float(value)
 
 
 class SweepRows(list):
