@@ -142,3 +142,20 @@ def test_recorded_shaking_example(tmp_path, capsys):
     assert own.peak == pytest.approx(0.3 * 9.80665, rel=0.02)
     assert record.baseline == "quadratic" and abs(record.end_motion()[0]) < 1e-12
     assert np.all(np.isfinite(moved))
+
+
+def test_bolted_slope_example(tmp_path, capsys):
+    """The factor of safety of the 8 m cut slope (issue 23, item 4), at a coarse tolerance:
+    dry, the bedding's tan 35 / tan 25 = 1.5016; wet, below 1.3; wet and bolted, above 1.3
+    again; the report's pictures and table written."""
+    example = load("bolted_slope")
+    rows = example.main(["--out", str(tmp_path), "--tolerance", "0.05", "--workers", "2"])
+    factors = {r["case"]: r["factor"] for r in rows}
+    assert factors["dry"] == pytest.approx(np.tan(np.radians(35)) / np.tan(np.radians(25)),
+                                           rel=0.03)
+    assert factors["wet"] < 1.3 < factors["bolted"]
+    assert rows[2]["bolts"] >= 8
+    for name in ("slope.png", "fos_dry.png", "fos_wet.png", "fos_bolted.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
+    assert len((tmp_path / "factors.csv").read_text().splitlines()) == 4
+    assert "bolted: StrengthReduction: F = " in capsys.readouterr().out

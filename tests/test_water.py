@@ -227,3 +227,15 @@ def test_the_scene_file_and_a_checkpoint_keep_the_water(tmp_path):
     with pytest.raises(dda.io.scene_file.SceneFileError,
                        match=r"wet.toml, line \d+, water.unit_weight: must be positive"):
         dda.load_scene(path)
+
+
+@pytest.mark.parametrize("zw", [0.0, 2.0, 3.0])
+def test_the_factor_of_safety_of_the_wet_planar_slide_is_hoek_and_brays(zw):
+    """Strength reduction (issue 23, item 3) of the planar slide with its crack filled to zw:
+    F within 2% of Hoek and Bray's (1.4534, 1.2249, 1.0816; measured -0.16%, +0.68%,
+    +0.29%)."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    with ThreadPoolExecutor(2) as pool:
+        fos = dda.studies.strength_reduction(slope(zw), executor=pool)
+    assert fos.factor == pytest.approx(hoek_bray(zw)[0], rel=0.02)
