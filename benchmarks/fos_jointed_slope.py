@@ -11,9 +11,12 @@ resolution of 1e-3 g, a 1% bracket), its trials on ``--workers`` local processes
 Dask cluster with ``--scheduler tcp://host:8786``. Writes ``results/fos_jointed_slope.md``
 (F, the trials), ``.csv`` (the trials) and ``.png`` (the failing blocks, the trials).
 
-Measured (one worker, bracket 1..2): F = 1.505 (stable at 1.501, failed at 1.509; +0.2%
-against planar sliding), 69 blocks failing; 9 trials of 83-148 s of CPU, most of each the
-first 2,300 to 4,900 steps, in which the stiff contacts settle at 4e-5 to 1e-3 s.
+Measured (``results/fos_jointed_slope.md``, two workers): F = 1.5015 (stable at 1.4951,
+failed at 1.5080; -0.01% against planar sliding), 68 blocks sliding out on a bedding plane;
+12 trials in 6 rounds, 1,357 s of CPU, 951 s of wall time. A trial costs 76-133 s of CPU
+(274 s at F = 0.5), most of it the first 2,300 to 4,700 steps, in which the stiff contacts
+settle at 4e-5 to 1e-3 s (the trial's own steps are 0.019 s). An earlier run on one worker,
+bracket 1..2: 1.505 (1.501 / 1.509), 9 trials.
 
 Run:  python benchmarks/fos_jointed_slope.py [--workers N] [--scheduler ADDRESS]
 """
