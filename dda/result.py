@@ -455,7 +455,8 @@ class Result:
             block pairs that carried a force at some recorded step, labelled "a/b", with
             ``block_a``, ``block_b`` and their ids) and ``force_component`` (normal, shear).
             Variables: ``displacement``, ``rotation``, ``velocity``, ``angular_velocity``,
-            ``strain_rate``, ``stress``, ``initial_centroid`` and ``joint_force``; see
+            ``strain_rate``, ``stress``, ``initial_centroid`` and ``joint_force``, and in a
+            scene with bolts ``bolt_force`` and ``bolt_broken`` (time x ``bolt``); see
             :mod:`dda.data` for each one's meaning.
 
         Examples
