@@ -332,3 +332,25 @@ def test_a_vertex_vertex_pair_across_another_joint_is_no_mirror():
     assert not any(v == 0 for v, _ in found)  # the big block's corner is not seen
     kept = keep_closed(cand, np.array([0]), np.array([6]), x, topo, d0, limit, 2, sunk)
     assert (0, 6) in set(zip(kept.vertex.tolist(), kept.edge.tolist(), strict=True))
+
+
+STEP = [(-0.5, -0.5), (2.0, -0.5), (2.0, 0.1), (1.5, 0.1), (1.0, 0.1), (1.0, 0.0), (0.0, 0.0),
+        (-0.5, 0.0)]  # a fixed block with a step: tread (3 -> 4) at 0.1, riser 4 -> 5, tread 5 -> 6
+
+
+@pytest.mark.parametrize("u0, v0", [(1.0 + 1e-5, 0.1 - 2e-6), (1.0 + 1e-5, 0.101),
+                                    (1.2, 0.1 - 2e-6), (1.2, 0.15)])
+def test_a_corner_at_a_steps_edge_is_held_by_the_tread_it_rests_on_not_the_one_below(u0, v0):
+    # a column's corner at the top of a step's riser, on the tread or just above it, with a
+    # search distance larger than the riser (a static analysis at a large dt). The lower
+    # tread's line lies below the corner (its gap the largest), but the corner would reach it
+    # only down the riser: the nearest edge, the tread under it, holds it (the lower tread
+    # held it, and the column sank 6 mm into the step untracked in a strength-reduction trial)
+    column = [(u0, v0), (u0 + 0.5, v0), (u0 + 0.5, v0 + 3.0), (u0, v0 + 3.0)]
+    x, offsets = stack(STEP, column)
+    topo = VertexTopology.from_offsets(offsets)
+    c = narrow_phase(x, topo, 0.3, 0.3, sunk_depth=1e-3)
+    held = {(int(v), int(e)) for v, e in zip(c.vertex, c.edge, strict=True)}
+    assert (8, 3) in held  # the column's lower left corner on the tread under it
+    assert (9, 2) in held  # and its lower right corner on the same (straight) tread
+    assert not any(v == 8 and e == 5 for v, e in held)

@@ -735,6 +735,7 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
     s_on = np.empty(most, dtype=np.bool_)
     s_sunk = np.empty(most, dtype=np.bool_)
     s_neg = np.empty(most)
+    s_dist = np.empty(most)
     s_least = np.empty(most, dtype=np.bool_)
     s_order = np.empty(most, dtype=np.int64)
     gap_tie = 1e-9
@@ -790,12 +791,14 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                             continue
                         if -gap > depth + sunk_depth:
                             continue
+                    dist = abs(gap)  # from the vertex to the edge (the segment)
                     if not on_edge:
                         if xi < 0.5:
                             ex, ey = p2x, p2y
                         else:
                             ex, ey = p3x, p3y
-                        if not np.hypot(px - ex, py - ey) <= reach:
+                        dist = np.hypot(px - ex, py - ey)
+                        if not dist <= reach:
                             continue
                     if not sunk:
                         entering = True
@@ -812,15 +815,25 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                     s_on[n_s] = on_edge
                     s_sunk[n_s] = sunk
                     s_neg[n_s] = (0.0 + nx * bisector[v, 0]) + ny * bisector[v, 1]
+                    s_dist[n_s] = dist
                     n_s += 1
                 if n_s == 0:
                     continue
-                # one edge: the least deep, then foot on the edge, then the best opposed
+                # one edge: of the nearest, the least deep, then foot on the edge, then the
+                # best opposed. The nearest first: round a concave block's convex corner
+                # (a step's riser top), a farther edge's line may lie beyond the vertex
+                # (the tread below the riser), and the least deep of all would be that
+                # edge while the vertex rests on the nearer one
+                nearest = np.inf
+                for i in range(n_s):
+                    nearest = min(nearest, s_dist[i])
                 best = -np.inf
                 for i in range(n_s):
-                    best = max(best, s_gap[i])
+                    s_least[i] = s_dist[i] <= nearest + gap_tie * s_len[i]
+                    if s_least[i]:
+                        best = max(best, s_gap[i])
                 for i in range(n_s):
-                    s_least[i] = s_gap[i] >= best - gap_tie * s_len[i]
+                    s_least[i] = s_least[i] and s_gap[i] >= best - gap_tie * s_len[i]
                     s_order[i] = i
                 for i in range(1, n_s):  # insertion sort (a handful of edges)
                     cur = s_order[i]

@@ -223,3 +223,24 @@ def test_an_overhang_on_a_penalty_soft_enough_to_sink_a_corner_past_the_hysteres
     # it rests on its two springs (2.55 mm at rest), swinging, and has not sunk through
     sink = 1.0 - sim.state.x[8:, 1].min()
     assert 1e-3 < sink < 4e-3
+
+
+@pytest.mark.parametrize("solver", sorted(SOLVERS))
+def test_a_column_pivoting_on_a_steps_edge_at_a_large_static_dt_stays_on_its_tread(solver):
+    """A strength-reduction trial of Goodman and Bray's columns (static, dt 0.157 s, so the
+    contact search reaches 0.3 m): the tall column stands on a tread whose front edge is a
+    step's riser top. The corner there took the lower tread's line beyond the riser as its
+    contact (the least deep of the base's edges, by 0.1 m, but reachable only down the
+    riser), lost the tread it rested on, and the column sank into the step: the guard
+    stopped the Newton trial at t = 1.10 s, 6.1 mm deep untracked. The nearest edge now
+    holds a corner."""
+    from dda.studies.limit_equilibrium import columns_scene
+    from dda.studies.reduction import reduced_scene
+
+    scene = reduced_scene(columns_scene([1.0, 0.5], [1.0, 3.0], [0.0, 0.1], psi=25.0,
+                                        phi_base=40.0, phi_side=40.0), 1.137)
+    sim = dda.Simulation(scene, dt=0.1571, solver=make_solver(solver), analysis="static")
+    w = watch(sim, 3.0, chunk=1)
+    assert_tracked(w)
+    # the columns rest on the base, a spring's depth in and no more
+    assert sim.committed.penetration < 1e-5
