@@ -297,7 +297,8 @@ class _Frames:
     coloured by one field on a fixed colour range, on axes in metres with a scale bar, a
     colour bar that names the quantity and its unit, and the time (matplotlib lays them out).
 
-    The camera and colour range are the series' first and last frames'.
+    The camera and the colour range cover every one of ``files``: a block that flies out
+    and comes back in the middle of a series stays in the picture.
     """
 
     DPI = 100
@@ -308,12 +309,12 @@ class _Frames:
         self.pv = _pyvista()
         self.field = field
         self.relative_to = relative_to
-        meshes, info = zip(*(_colour_mesh(self.pv, f, field, relative_to)
-                             for f in (files[0], files[-1])), strict=True)
-        info = info[-1]
-        lo = np.min([m.bounds[::2] for m in meshes], axis=0)
-        hi = np.max([m.bounds[1::2] for m in meshes], axis=0)
-        top = max(float(np.nanmax(m.cell_data["shown"])) for m in meshes)
+        lo, hi, top = np.full(3, np.inf), np.full(3, -np.inf), -np.inf
+        for f in dict.fromkeys(files):  # each file once, read one at a time
+            m, info = _colour_mesh(self.pv, f, field, relative_to)
+            lo = np.minimum(lo, m.bounds[::2])
+            hi = np.maximum(hi, m.bounds[1::2])
+            top = max(top, float(np.nanmax(m.cell_data["shown"])))
         base, unit = _split_unit(info["field"])
         self.unit, self.scale = _display_unit(unit, top)
         self.clim = (0.0, top / self.scale if top > 0 else 1.0)
@@ -471,8 +472,8 @@ def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800,
 
     ``max_frames`` keeps that many frames evenly spread over the series. An MP4's frame
     size is rounded up to whole 16-pixel blocks, as the codec needs. ``field`` and
-    ``relative_to`` as in :func:`render_frame`; each frame is drawn as it draws one, on the
-    camera and colour range of the series' first and last frames.
+    ``relative_to`` as in :func:`render_frame`; each frame is drawn as it draws one, on one
+    camera and colour range that cover all the frames drawn.
     """
     out = Path(out)
     kind = out.suffix.lower()
@@ -490,7 +491,7 @@ def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800,
     if max_frames is not None and len(entries) > max_frames:
         pick = np.unique(np.linspace(0, len(entries) - 1, max_frames).round().astype(int))
         entries = [entries[i] for i in pick]
-    frames = _Frames([entries[0][1], entries[-1][1]], field, size, relative_to)
+    frames = _Frames([f for _, f in entries], field, size, relative_to)
     images = [frames.image(f, t) for t, f in entries]
     out.parent.mkdir(parents=True, exist_ok=True)
     if kind == ".gif":

@@ -265,6 +265,28 @@ def test_the_png_has_axes_in_metres(series, tmp_path):
     assert [_nice_length(s) for s in (0.37, 1.0, 7.0, 0.02)] == [0.2, 1.0, 5.0, 0.02]
 
 
+def test_an_animation_keeps_a_block_that_flies_out_in_the_middle_in_the_picture(series,
+                                                                                 tmp_path):
+    """The camera and colour range cover every frame, not the first and last only: a
+    block 10 m away in the middle frame (and back at the end) is in the picture."""
+    import meshio
+
+    from dda.plot import _Frames
+
+    _, pvd = series
+    first = plot.read_pvd(pvd)[0][1]
+    mesh = meshio.read(first)
+    far = tmp_path / "far.vtu"
+    moved = mesh.points.copy()
+    moved[:, 0] += 10.0
+    meshio.write(far, meshio.Mesh(moved, mesh.cells, point_data=mesh.point_data,
+                                  cell_data=mesh.cell_data, field_data=mesh.field_data))
+    frames = _Frames([first, far, first], "displacement", (640, 480))
+    x0, x1, _, _ = frames.extent
+    assert x0 <= mesh.points[:, 0].min() and x1 >= moved[:, 0].max()
+    assert x1 - x0 < 1.2 * (moved[:, 0].max() - mesh.points[:, 0].min())
+
+
 @pytest.fixture(scope="module")
 def named_files(tmp_path_factory):
     """A file whose blocks are named "7" (block_id 0), "table" (1, shaken) and "top" (2),
