@@ -23,18 +23,22 @@ A vertex-edge pair is a contact candidate when
    edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG`` (a
    vertex sunk into the block deeper than ``sunk_depth`` is exempt: the nearest edge holds
    it).
-Of several edges of one block that pass for the same vertex, the one with the largest gap is
-preferred (the least deep: at a corner where four blocks meet, a vertex sliding along one
-joint past the corner must not be taken as deep behind the other joint's line), then one whose
-foot lies on the edge, then the one whose outward normal is most opposed to the vertex's
-outward bisector. That choice is right where the block is convex; at a reflex (concave)
-vertex of the block the solid is the union of the two edges' half-planes, and a vertex in the
-corner is near both: the edge across a reflex vertex from the chosen one is kept as well (Shi's
-rule for a convex vertex entering a concave angle: two vertex-edge contacts). A vertex-vertex
-case (the foot at the end of the edge, the two vertices within the search distance) shows up
-as two mirrored pairs, P on an edge at Q and Q on an edge at P; only one is kept: the one whose
-foot lies on its edge, else the better opposed one; both when the other's vertex is inside the
-other block deeper than ``sunk_depth`` (corners sunk into each other).
+Of several edges of one block that pass for the same vertex, the nearest are preferred (the
+distance from the vertex to the edge as a segment: round a convex corner of a concave block,
+the top of a step's riser, the line of the tread below lies beyond a corner resting on the
+tread above, and only the riser leads there), of those the one with the largest gap (the least
+deep: at a corner where four blocks meet, a vertex sliding along one joint past the corner must
+not be taken as deep behind the other joint's line), then one whose foot lies on the edge, then
+the one whose outward normal is most opposed to the vertex's outward bisector. For a convex
+block the nearest edge is the least deep one (outside it the feet of two edges never both lie
+on their edges, and in a corner's wedge the two are equally near). At a reflex (concave) vertex
+of the block the solid is the union of the two edges' half-planes, and a vertex in the corner
+is near both: the edge across a reflex vertex from the chosen one is kept as well (Shi's rule
+for a convex vertex entering a concave angle: two vertex-edge contacts). A vertex-vertex case
+(the foot at the end of the edge, the two vertices within the search distance) shows up as two
+mirrored pairs, P on an edge at Q and Q on an edge at P; only one is kept: the one whose foot
+lies on its edge, else the better opposed one; both when the other's vertex is inside the other
+block deeper than ``sunk_depth`` (corners sunk into each other).
 """
 
 from __future__ import annotations
