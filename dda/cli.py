@@ -5,7 +5,7 @@ scene.
     dda demo [--out DIR]
     dda render OUT/case.pvd [--png FILE] [--gif FILE] [--mp4 FILE] [--field NAME] [--frame N]
                             [--relative-to BLOCK|auto|none]
-    dda info SCENE.toml
+    dda info SCENE.toml|SCRIPT.py
     dda fos SCENE.toml [--tolerance T] [--analysis auto|static|dynamic] [--workers N]
                        [--picture FILE] [--csv FILE]
 """
@@ -17,6 +17,7 @@ import runpy
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 
@@ -168,30 +169,113 @@ def describe(loaded, budget: float = 2.0) -> str:
     if loaded.duration is not None:
         steps = int(np.ceil(loaded.duration / sim.dt - 1e-9))
         per_step, startup, done, warm = _time_steps(sim, steps, budget)
-        # 'dda run' writes a VTU frame every [output] every steps: time one
-        frames = steps // max(loaded.every, 1) + 1
-        with tempfile.TemporaryDirectory() as folder:
-            writer = VTUWriter(Path(folder) / "frame")
-            times = []
-            for _ in range(3):  # the first loads meshio's writer
-                start = time.perf_counter()
-                writer.write(sim.frame())
-                times.append(time.perf_counter() - start)
-            writer.close()
-            per_frame = float(np.mean(times[1:]))
+        # 'dda run' writes a VTU frame every [output] every steps (a script's run: its
+        # writer's, or none): time one
+        frames = 0 if loaded.every is None else steps // max(loaded.every, 1) + 1
+        per_frame = 0.0
+        if frames:
+            with tempfile.TemporaryDirectory() as folder:
+                writer = VTUWriter(Path(folder) / "frame")
+                times = []
+                for _ in range(3):  # the first loads meshio's writer
+                    start = time.perf_counter()
+                    writer.write(sim.frame())
+                    times.append(time.perf_counter() - start)
+                writer.close()
+                per_frame = float(np.mean(times[1:]))
         total = startup + per_step * (steps - warm) + per_frame * frames
-        timed = ("all of them" if warm + done == steps else
+        timed = ("all of them" if warm + done >= steps else
                  f"steps {warm + 1} to {warm + done}; cuts add more")
+        writes = (f" and {1e3 * per_frame:.3g} ms for each of {frames} VTU frames" if frames
+                  else "; no VTU frames")
         lines.append(f"cost       {loaded.duration:g} s = {steps} steps; about {total:.3g} s: "
                      f"{startup:.2g} s to start, {1e3 * per_step:.3g} ms per step (timed on "
-                     f"{timed}) and {1e3 * per_frame:.3g} ms for each of {frames} VTU frames")
+                     f"{timed}){writes}")
     return "\n".join(lines)
+
+
+class _FirstRun(BaseException):  # not an Exception: a script's ``except Exception`` lets it by
+    """Raised in place of a script's first :meth:`dda.Simulation.run`: the simulation, the
+    duration and the output it was given."""
+
+
+@dataclass
+class _ScriptRun:
+    """A script's first simulation, as :func:`describe` reads a scene file's."""
+
+    path: str  # the script, and which of its simulations this is
+    sim: object
+    duration: float | None
+    every: int | None  # VTU frames every this many steps (None: the run writes none)
+
+    @property
+    def scene(self):
+        return self.sim.scene
+
+    @property
+    def solver(self):
+        return self.sim.solver
+
+    @property
+    def effects(self) -> list:
+        return scene_effects(self.sim.scene)
+
+    def simulation(self):
+        return self.sim
+
+
+def scene_effects(scene) -> list:
+    """What a :class:`dda.Scene` holds beyond its blocks and joints, in words (a scene file's
+    ``effects``)."""
+    names = [b.name for b in scene.blocks]
+    out = ["gravity"] if scene.gravity else []
+    out += [f"shaking of {names[s.block]}" for s in scene.shakes]
+    out += [f"prescribed motion of {names[m.block]}" for m in scene.motions]
+    out += [f"point load on {names[p.block]}" for p in scene.point_loads]
+    if scene.bolts:
+        out.append(f"{len(scene.bolts)} bolt{'s' if len(scene.bolts) > 1 else ''}")
+    if scene.damping_settings:
+        out.append("damping")
+    if scene.water is not None:
+        out.append("water table")
+    return out
+
+
+def _first_run(path) -> _ScriptRun:
+    """Run the script at ``path`` until it first calls :meth:`dda.Simulation.run` in this
+    process, and stop it there: that simulation, as it was about to run."""
+    from dda.simulation import Simulation
+
+    real = Simulation.run
+
+    def caught(self, duration=None, output=None, *args, **kwargs):
+        raise _FirstRun(self, duration, output)
+
+    Simulation.run = caught
+    try:
+        _run_script(path, None)
+    except _FirstRun as first:
+        sim, duration, output = first.args
+        every = getattr(output if output is not None else sim.output, "every", None)
+        if duration is None and sim._resume_end is not None:
+            duration = sim._resume_end - sim.committed.time
+        return _ScriptRun(f"{path} (the first simulation it runs)", sim, duration, every)
+    finally:
+        Simulation.run = real
+    raise ValueError(f"{path} ran to its end without running a dda.Simulation in its own "
+                     "process (a sweep's workers run theirs elsewhere): nothing to describe")
 
 
 def cmd_info(args):
     from dda.io.scene_file import load_scene
 
-    print(describe(load_scene(args.scene)))
+    path = Path(args.scene)
+    if path.suffix == ".py":
+        if not path.is_file():
+            raise SystemExit(f"dda info: no file {path}")
+        print(describe(_first_run(path)))
+    else:
+        print(describe(load_scene(path)))
     return 0
 
 
@@ -282,8 +366,10 @@ def main(argv=None) -> int:
     p.add_argument("--csv", help="write the trials to this CSV file")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_fos)
-    p = sub.add_parser("info", help="blocks, contacts, effects and estimated cost of a scene")
-    p.add_argument("scene")
+    p = sub.add_parser("info", help="blocks, contacts, effects and estimated cost of a scene "
+                       "(of a script: of the first simulation it runs)")
+    p.add_argument("scene", help="SCENE.toml, or SCRIPT.py: the script runs until it first "
+                   "calls Simulation.run, and that simulation is described")
     p.set_defaults(func=cmd_info)
     args = ap.parse_args(argv)
     from dda.io.scene_file import SceneFileError

@@ -171,6 +171,47 @@ def test_info_describes_the_scene(series, capsys):
     assert " s to start, " in out and "(timed on all of them)" in out and "11 VTU frames" in out
 
 
+SCRIPT = """
+from pathlib import Path
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.io.vtu import VTUWriter
+from dda.materials import LinearElastic
+
+here = Path(__file__).parent
+rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+scene = dda.Scene(gravity=9.81)
+base = scene.add_block([(0, 0), (3, 0), (3, 0.5), (0, 0.5)], rock, fixed=True, name="base")
+scene.add_block([(1, 0.5), (1.5, 0.5), (1.5, 1.0), (1, 1.0)], rock, name="top")
+scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(phi=20.0)))
+scene.shake(base, acceleration=lambda t: (6.0, 0.0))
+try:
+    dda.Simulation(scene, dt=2e-3).run(0.1, output=VTUWriter(here / "out" / "s", every=5))
+except Exception:
+    pass
+(here / "ran").write_text("the script went on past its first run")
+"""
+
+
+def test_info_describes_a_scripts_first_simulation(tmp_path, capsys):
+    """``dda info SCRIPT.py`` runs the script up to its first Simulation.run, describes that
+    simulation and stops the script there (an ``except Exception`` in it does not go on)."""
+    script = tmp_path / "script.py"
+    script.write_text(SCRIPT)
+    assert main(["info", str(script)]) == 0
+    out = capsys.readouterr().out
+    assert "script.py (the first simulation it runs)" in out
+    assert "blocks     2 (1 free of which 0 rigid, 1 fixed or moved)" in out
+    assert "effects    gravity, shaking of base" in out
+    assert "50 steps" in out and "11 VTU frames" in out
+    assert not (tmp_path / "ran").exists() and not list(tmp_path.glob("out/*.vtu"))
+    lib = tmp_path / "lib.py"
+    lib.write_text("x = 1\n")
+    assert main(["info", str(lib)]) == 2
+    assert "ran to its end without running a dda.Simulation" in capsys.readouterr().err
+
+
 def test_errors_are_one_line_with_exit_code_2(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text(SCENE.replace('material = "rock"\nvertices = [[1', 'material = "rok"\n'
