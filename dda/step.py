@@ -43,7 +43,12 @@ from dda.contact.detection import (
 )
 from dda.contact.element import ContactElement, LawGroups
 from dda.contact.faces import FACE_ANGLE
-from dda.contact.penetration import GuardReport, _untracked_reason, penetration_guard
+from dda.contact.penetration import (
+    GuardReport,
+    _untracked_reason,
+    held_by_contact,
+    penetration_guard,
+)
 from dda.contact.tangent import SPRING_TERMS
 from dda.errors import SimulationError
 from dda.kernels.blocks import step_end, step_start
@@ -175,6 +180,7 @@ class StepReport:
     penetration: float = 0.0
     spring_penetration: float = 0.0
     untracked: float = 0.0  # the deepest untracked penetration, in penetration tolerances
+    untracked_held: bool = False  # ... and a closed contact holds its vertex (GuardReport)
 
     @classmethod
     def of(cls, sol: StepSolution, unknowns: int, pairs: int, reason: str = "",
@@ -184,7 +190,7 @@ class StepReport:
         guard = guard or GuardReport()
         return cls(sol.converged and not reason, reason or sol.reason, sol.iterations,
                    sol.open_close_passes, list(sol.residual_norms), search_hint, unknowns,
-                   pairs, guard.deepest, guard.spring_deepest, guard.untracked)
+                   pairs, guard.deepest, guard.spring_deepest, guard.untracked, guard.held)
 
 
 @dataclass(frozen=True)
@@ -398,10 +404,11 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
     if status == MOVED or status == TOO_FAR:
         refused = _refusal(model, ended, d0, settings.max_displacement_ratio)
         return None, StepReport.of(sol, *costs, reason=refused[0], search_hint=refused[1])
-    reason = ""
+    reason, held = "", False
     if status == UNTRACKED:
         reason = _untracked_reason(model, x_new, bool(on_edge), gv, gk, gdepth, gtol)
-    guard = GuardReport(reason, deepest, spring, untracked)
+        held = held_by_contact(sol.contacts, model.topo, gv, gk, bool(on_edge))
+    guard = GuardReport(reason, deepest, spring, untracked, held)
     report = StepReport.of(sol, *costs, reason=reason, guard=guard)
     if reason:
         return None, report

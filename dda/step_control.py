@@ -23,6 +23,10 @@ from dda.penalty_advice import contact_cut
 
 __all__ = ["StepControl"]
 
+#: a cut try whose untracked penetration is still above this share of the try before's has
+#: not been helped by the smaller step (see :meth:`StepControl.check_can_go_on`)
+STALLED = 0.9
+
 
 @dataclass
 class StepControl:
@@ -50,6 +54,8 @@ class StepControl:
     contact_cuts: int = 0  # steps cut because the contacts would not settle
     wait: int = 0  # accepted steps before the next doubling (0: grow_after)
     probing: bool = False  # the step size was just doubled and has not held yet
+    # the untracked penetration (tolerances) of this step's last refused try (-1: none yet)
+    tried_untracked: float = -1.0
 
     def __post_init__(self):
         if self.dt_now is None:
@@ -83,6 +89,7 @@ class StepControl:
     def accepted(self) -> None:
         """After an accepted step: forget the hint, grow a cut step size back when due."""
         self.search_hint = 0.0
+        self.tried_untracked = -1.0
         self.steps += 1
         self.good_steps += 1
         if self.probing and self.good_steps >= self.grow_after:  # the doubled size held
@@ -101,14 +108,25 @@ class StepControl:
         help (``tries`` cuts of this step, the last at ``dt``, from the ``committed``
         state)."""
         time = committed.time
-        if report.untracked > 1.0 and committed.untracked > 0.5:
+        before = getattr(self, "tried_untracked", -1.0)  # (a checkpoint from before it)
+        self.tried_untracked = report.untracked
+        held = getattr(report, "untracked_held", False)
+        stalled = before > 0.0 and report.untracked > STALLED * before
+        if report.untracked > 1.0 and committed.untracked > 0.5 and (stalled or not held):
             # the vertex is already half the tolerance in, untracked, at the start of the
-            # step: any step that moves it on is refused, and smaller ones only creep
+            # step: with no closed contact holding it, any step that moves it on is refused
+            # and smaller ones only creep. One that a contact holds takes up the start's
+            # depth in its spring, and leaves untracked only what its linear gap misses of
+            # the step's own turning and sliding, which a smaller step shrinks (columns
+            # toppling in a static analysis at 0.2 s a step): it is cut until a smaller step
+            # leaves it as deep
+            halved = (f", and halving dt left it {report.untracked:.2g} deep ({before:.2g} "
+                      "before)" if held else "")
             raise SimulationError(
                 f"the run cannot go on at t = {time:.6g} s: {report.reason}; it was already "
                 f"{committed.untracked:.2g} tolerances deep, untracked, at the start of "
-                "the step, so a smaller dt cannot help (contact detection missed it: please "
-                "report the scene)"
+                f"the step{halved}, so a smaller dt cannot help (contact detection missed it: "
+                "please report the scene)"
             )
         if tries > self.max_cuts:
             raise SimulationError(

@@ -42,7 +42,7 @@ from dda.kernels.kinematics import _frame
 
 __all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
            "edge_penetrations", "untracked_depth", "untracked_edge_depth",
-           "untracked_penetrations", "released_depth"]
+           "untracked_penetrations", "released_depth", "held_by_contact"]
 
 
 @dataclass
@@ -349,13 +349,17 @@ class GuardReport:
     ``reason`` is empty when every vertex inside another block is held by a closed contact
     at its depth (give or take the tolerance), else why the step is refused. ``deepest`` is
     the deepest vertex inside another block (m), ``spring_deepest`` the deepest closed spring
-    (m), ``untracked`` the deepest untracked penetration in tolerances.
+    (m), ``untracked`` the deepest untracked penetration in tolerances; ``held`` whether the refused
+    one's vertex has a closed contact against that block (:func:`held_by_contact`).
     """
 
     reason: str = ""
     deepest: float = 0.0
     spring_deepest: float = 0.0
     untracked: float = 0.0
+    # the refused penetration's vertex (or an end of its edge) has a closed contact against
+    # that block: a held contact whose linear gap fell short, not one detection missed
+    held: bool = False
 
 
 GUARD_KERNEL = True
@@ -395,7 +399,8 @@ def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
         if not untracked > 1.0:
             return GuardReport("", deepest, spring, untracked)
         return GuardReport(_untracked_reason(model, x_new, on_edge, v, k, depth, tol),
-                           deepest, spring, untracked)
+                           deepest, spring, untracked,
+                           held_by_contact(contacts, topo, int(v), int(k), bool(on_edge)))
     if released is None and dashpot is not None:
         released = released_depth(x_new, contacts, topo, np.asarray(dashpot) > 0.0)
     contacts = _holding(contacts, normal_penalty, released)
@@ -432,7 +437,27 @@ def penetration_guard(model, x_new, contacts, normal_penalty, pairs,
     i = int(np.argmax(r))
     reason = _untracked_reason(model, x_new, on_edge, int(p.vertex[i]), int(p.block[i]),
                                float(p.depth[i]), float(t[i]))
-    return GuardReport(reason, deepest, spring, untracked)
+    return GuardReport(reason, deepest, spring, untracked,
+                       held_by_contact(contacts, topo, int(p.vertex[i]), int(p.block[i]),
+                                       on_edge))
+
+
+def held_by_contact(contacts, topo: VertexTopology, v: int, k: int, on_edge: bool) -> bool:
+    """Whether a closed contact holds vertex ``v`` (with ``on_edge``, either end of its edge
+    to ``nxt[v]``) against block ``k``: one of the vertex against an edge of k, or a vertex
+    of k against an edge of the vertex's block at the vertex (its vertex-vertex mirror).
+
+    An untracked penetration so held is a spring whose linear gap fell short of the step's
+    turning and sliding, which a smaller step shrinks; one not held is a contact detection
+    missed (:meth:`dda.step_control.StepControl.check_can_go_on`)."""
+    c = contacts
+    nxt = topo.nxt
+    ends = [v, int(nxt[v])] if on_edge else [v]
+    j = int(topo.block[v])
+    closed = c.state != OPEN
+    own = np.isin(c.vertex, ends) & (c.bk == k)
+    mirror = (c.bj == k) & (c.bk == j) & (np.isin(c.edge, ends) | np.isin(nxt[c.edge], ends))
+    return bool(np.any(closed & (own | mirror)))
 
 
 def _untracked_reason(model, x_new, on_edge, v, k, depth, tol) -> str:
