@@ -275,3 +275,21 @@ IMPACTS = {
     "L on a step": ell_on_a_step,
     "lip": lip,
 }
+
+
+def box_tipping_off_a_step(penalty=1e9):
+    """A 0.2 x 0.6 m box turned 30 degrees clockwise, dropped 0.1 m onto the upper tread of
+    a fixed step (riser 0.1 m at x = 0.6) so that it overhangs the riser's top corner by
+    0.1 m and tips off it; phi 25. Its step: 0.5 s, static."""
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-0.5, -0.5), (1.5, -0.5), (1.5, 0.1), (0.6, 0.1), (0.6, 0.0),
+                     (-0.5, 0.0)], ROCK, fixed=True, name="stairs")
+    p = np.array(box(0.5, 0.1, 0.2, 0.6))
+    c = p.mean(axis=0)
+    turn = np.radians(-30.0)
+    rot = np.array([[np.cos(turn), np.sin(turn)], [-np.sin(turn), np.cos(turn)]])
+    p = (p - c) @ rot + c
+    p[:, 1] += 0.2 - p[:, 1].min()
+    scene.add_block([tuple(q) for q in p], ROCK, name="box")
+    scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(phi=25.0)))
+    return scene
