@@ -77,6 +77,18 @@ Hence ``analysis="auto"``: static for Newton (a third of the cost, and clearer: 
 trial settles to 2e-4 of the criterion, a dynamic one to up to 2e-3 on the incline and 5e-3
 on the columns), dynamic for legacy DDA.
 
+**A static trial can stand on a fragile equilibrium above F*.** Four columns on stepped
+treads (heights 0.6 / 1.2 / 1.8 / 1.5 m, 0.5 m wide, psi 20, phi 50 base / 40 sides: Goodman
+and Bray's ``F* = 1.8444``): Newton's static trials fail at 1.855-1.89 and above 1.897 but
+stand at 1.893-1.896, held by a ninth contact, the toe of the fourth column on the third
+column's face, loaded on its friction cone (a rigid-block check finds admissible forces with
+it up to F = 2.147, without it up to exactly 1.8444). Whether a trial closes that contact is
+decided in its first steps at a scale of 1e-7 m: by the size of its first step, which the
+OPEN-CLOSE cuts of that step set (a full first step opens it, one of dt/8 closes it). Given a
+rotation rate of 1e-5 rad/s, that equilibrium topples; dynamic trials never reach it and
+fail from 1.84 up, with both solvers. A search of one trial a round landed in the window and
+gave 1.902 (+3.1%); the default two a round give 1.8597 (+0.8%).
+
 **The search.** Round 0 runs ``per_round`` factors spread geometrically over ``bracket``
 (ends included, at least the two ends); while every trial is stable (or every one failed)
 the bracket is widened by factors of 2 up to ``limits``. Then each round runs ``per_round``
