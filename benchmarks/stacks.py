@@ -113,7 +113,8 @@ def measure(n: int, solver: str, steps: int, case: str = "stack") -> dict:
         # numeric factorizations and symbolic analyses of the sparse system per step
         "factorizations": nonlinear.factors().counts[0] / max(len(st), 1),
         "analyses": nonlinear.factors().counts[1] / max(len(st), 1),
-        "backend": nonlinear.factors().backend,
+        "backend": nonlinear.factors().backend + (
+            " (single precision, refined)" if nonlinear.factors().refinements else ""),
         "why_close": int(np.count_nonzero(blocked[:, 0])),
         "why_open": int(np.count_nonzero(blocked[:, 1])),
         "why_stick_slip_only": int(np.count_nonzero(

@@ -97,11 +97,15 @@ def test_backend_choice_by_environment(monkeypatch):
 @pardiso
 @pytest.mark.parametrize("solver", [LegacyPullBack, NewtonRaphson])
 def test_a_stack_settles_alike_with_either_backend(monkeypatch, solver):
-    """9 x 9 blocks (486 unknowns: the sparse path) for 15 steps: the two backends agree to
-    round-off, and the symbolic analysis is done once for the steps whose pattern stands."""
+    """9 x 9 blocks (486 unknowns: the sparse path) for 15 steps: the two backends, and
+    PARDISO in mixed precision, agree to round-off, and the symbolic analysis is done once
+    for the steps whose pattern stands."""
     out = {}
-    for backend in ("superlu", "pardiso"):
+    for backend, precision in (("superlu", "auto"), ("pardiso", "double"),
+                               ("pardiso", "mixed")):
         monkeypatch.setenv("DDA_SPARSE_SOLVER", backend)
+        monkeypatch.setenv("DDA_PARDISO_PRECISION", precision)
+        backend = backend if precision != "mixed" else "mixed"
         s = solver()
         sim = dda.Simulation(stack_scene(9), dt=1e-3, solver=s, max_open_close=30)
         r = sim.run(0.015, progress=False)
@@ -112,8 +116,9 @@ def test_a_stack_settles_alike_with_either_backend(monkeypatch, solver):
             assert analyses < factorizations / 3
         pickle.loads(pickle.dumps(s))  # the factorizations are not part of the solver's state
         assert "_factors" not in pickle.loads(pickle.dumps(s)).__dict__
-    np.testing.assert_allclose(out["pardiso"][0], out["superlu"][0], rtol=0, atol=1e-9)
-    np.testing.assert_array_equal(out["pardiso"][1], out["superlu"][1])
+    for other in ("pardiso", "mixed"):
+        np.testing.assert_allclose(out[other][0], out["superlu"][0], rtol=0, atol=1e-9)
+        np.testing.assert_array_equal(out[other][1], out["superlu"][1])
 
 
 @pytest.mark.parametrize("backend", ["superlu", pytest.param("pardiso", marks=pardiso)])
@@ -164,12 +169,17 @@ def test_an_upper_triangle_falls_back_to_superlu_whole():
     np.testing.assert_allclose(sf.UpperTriangle(upper) @ x, k @ x, rtol=1e-13, atol=1e-12)
 
 
-@pytest.mark.parametrize("backend", ["superlu", pytest.param("pardiso", marks=pardiso)])
+@pytest.mark.parametrize("backend", ["superlu", pytest.param("pardiso", marks=pardiso),
+                                     pytest.param("mixed", marks=pardiso)])
 @pytest.mark.parametrize("symmetric", [True, False])
-def test_solve_near_reuses_the_last_factorization(backend, symmetric):
+def test_solve_near_reuses_the_last_factorization(monkeypatch, backend, symmetric):
     """A matrix close to the one factorized last (a later Newton iteration's tangent) is
     solved by GMRES preconditioned with that factorization, to NEAR_RTOL, with no new one;
-    one far from it, or of another pattern, is factorized."""
+    one far from it, or of another pattern, is factorized. "mixed": PARDISO's factors in
+    single precision, the preconditioner then."""
+    if backend == "mixed":
+        monkeypatch.setenv("DDA_PARDISO_PRECISION", "mixed")
+        backend = "pardiso"
     unsym = 0.0 if symmetric else 0.4
     k, rhs = block_system(80, 1, unsymmetric=unsym)
     f = sf.make_factor(backend, symmetric)
@@ -218,3 +228,91 @@ def test_newton_iterations_reuse_the_tangent_factorization():
                                    rtol=0, atol=1e-11)
         np.testing.assert_allclose(res_near.stress(block), res_new.stress(block),
                                    rtol=0, atol=1e-2)
+
+
+def chain_laplacian(n, shift):
+    """The tridiagonal ``2, -1`` chain of ``n`` unknowns plus ``shift`` on the diagonal:
+    symmetric positive definite with a condition number of about ``4 / (pi^2 / n^2 + shift)``
+    (a static analysis' loosely held chain)."""
+    main = np.full(n, 2.0 + shift)
+    k = sp.diags([-np.ones(n - 1), main, -np.ones(n - 1)], [-1, 0, 1], format="csc")
+    k.sort_indices()
+    return k, np.random.default_rng(0).normal(size=n)
+
+
+@pardiso
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_mixed_precision_solves_to_double_precision_accuracy(symmetric):
+    """Single-precision factors with the solution refined in double precision: the answer
+    within MIXED_RTOL of the double factorization's, after one refinement here, where the
+    single-precision solve alone is off by about 1e-6."""
+    k, rhs = block_system(400, 3, unsymmetric=0.0 if symmetric else 0.3)
+    assert k.shape[0] >= sf.MIXED_MIN_UNKNOWNS
+    exact = sf.PardisoFactor(symmetric, precision="double").solve(k, rhs)
+    f = sf.PardisoFactor(symmetric, precision="auto")
+    x = f.solve(k, rhs)
+    assert f._single and f._data.dtype == np.float32
+    assert f.refinements == 1 and f.single_failures == 0 and f.fallbacks == 0
+    err = np.linalg.norm(x - exact) / np.linalg.norm(exact)
+    assert err <= 10 * sf.MIXED_RTOL
+    unrefined = f._apply(rhs)
+    assert np.linalg.norm(unrefined - exact) / np.linalg.norm(exact) > 1e3 * err
+    # a second right-hand side with the same matrix: no new factorization
+    x2 = f.solve(k, 2.0 * rhs)
+    assert f.factorizations == 1
+    np.testing.assert_allclose(x2, 2.0 * exact, rtol=0, atol=1e-10 * np.abs(exact).max())
+
+
+@pardiso
+def test_small_systems_stay_in_double_precision():
+    k, rhs = block_system(60, 1)
+    assert k.shape[0] < sf.MIXED_MIN_UNKNOWNS
+    f = sf.PardisoFactor(True)
+    assert f.precision == "auto"
+    assert_solves(k, f.solve(k, rhs), rhs)
+    assert not f._single and f.refinements == 0
+    forced = sf.PardisoFactor(True, precision="mixed")
+    assert_solves(k, forced.solve(k, rhs), rhs)
+    assert forced._single and forced.refinements >= 1
+
+
+@pardiso
+def test_mixed_precision_falls_back_to_double_on_an_ill_conditioned_matrix():
+    """A chain whose condition number (about 4e6) times single precision's 6e-8 is not small:
+    the refinement does not contract, the matrix is factorized in double precision, and the
+    holder stays in double precision from then on."""
+    k, rhs = chain_laplacian(3000, 1e-9)
+    f = sf.PardisoFactor(True, precision="mixed")
+    x = f.solve(k, rhs)
+    assert np.linalg.norm(k @ x - rhs) <= 1e-10 * np.linalg.norm(rhs)
+    assert f.single_failures == 1 and not f._single and f.fallbacks == 0
+    assert not f.wants_single(10**6)
+    x2 = f.solve(k, rhs)
+    np.testing.assert_array_equal(x2, x)
+    # well conditioned, the same chain stays in single precision
+    k3, rhs3 = chain_laplacian(3000, 1.0)
+    g = sf.PardisoFactor(True, precision="mixed")
+    assert_solves(k3, g.solve(k3, rhs3), rhs3)
+    assert g._single and g.single_failures == 0
+
+
+@pardiso
+def test_precision_switches_between_patterns():
+    """A small system then a large one then a small one through one holder: each analysed in
+    its own precision (the other's memory released), each answer exact."""
+    f = sf.PardisoFactor(False)
+    for blocks in (60, 400, 60, 400):
+        k, rhs = block_system(blocks, blocks, unsymmetric=0.3)
+        assert_solves(k, f.solve(k, rhs), rhs)
+        assert f._single == (k.shape[0] >= sf.MIXED_MIN_UNKNOWNS)
+    assert (f.analyses, f.factorizations, f.fallbacks) == (4, 4, 0)
+
+
+def test_precision_choice_by_environment(monkeypatch):
+    monkeypatch.setenv("DDA_PARDISO_PRECISION", "double")
+    assert sf.default_precision() == "double"
+    monkeypatch.setenv("DDA_PARDISO_PRECISION", "half")
+    with pytest.raises(ValueError, match="DDA_PARDISO_PRECISION must be one of auto, double"):
+        sf.default_precision()
+    monkeypatch.delenv("DDA_PARDISO_PRECISION")
+    assert sf.default_precision() == "auto"
