@@ -317,3 +317,23 @@ def test_precision_choice_by_environment(monkeypatch):
         sf.default_precision()
     monkeypatch.delenv("DDA_PARDISO_PRECISION")
     assert sf.default_precision() == "auto"
+
+
+@pardiso
+def test_a_matrix_pardiso_refuses_in_single_precision_is_factorized_in_double(monkeypatch):
+    """A PARDISO error on the single-precision factors (a pivot that rounding made zero)
+    sends the matrix to a double-precision factorization of PARDISO's, not to SuperLU."""
+    k, rhs = block_system(400, 6)
+    f = sf.PardisoFactor(True, precision="mixed")
+    call = f._call
+
+    def refuse_single(phase, data, b):
+        if phase == 22 and data.dtype == np.float32:
+            from pypardiso.pardiso_wrapper import PyPardisoError
+
+            raise PyPardisoError(-4)
+        return call(phase, data, b)
+
+    monkeypatch.setattr(f, "_call", refuse_single)
+    assert_solves(k, f.solve(k, rhs), rhs)
+    assert (f.single_failures, f.fallbacks, f._single) == (1, 0, False)

@@ -328,6 +328,9 @@ class PardisoFactor(SparseFactor):
             sol = self._call(33, self._data, b).reshape(-1)
         except PyPardisoError:
             self._pattern = self._values = None
+            if single:  # PARDISO refused the single-precision factors: double precision
+                self.single_failures += 1
+                return self.solve(k, rhs)
             sol = None
         if sol is not None and _small_residual(k, sol, rhs):
             return sol
