@@ -337,3 +337,36 @@ def test_a_matrix_pardiso_refuses_in_single_precision_is_factorized_in_double(mo
     monkeypatch.setattr(f, "_call", refuse_single)
     assert_solves(k, f.solve(k, rhs), rhs)
     assert (f.single_failures, f.fallbacks, f._single) == (1, 0, False)
+
+
+@pardiso
+@pytest.mark.parametrize("size", [1e-30, 1e40])
+def test_mixed_precision_keeps_its_accuracy_at_any_scale(size):
+    """A right-hand side far from 1 (a refinement's residual of 1e-40 would round to zero in
+    single precision, one of 1e40 overflow): the answer to double's accuracy all the same."""
+    k, rhs = block_system(400, 3)
+    k = (k * 1e10).tocsc()
+    exact = sf.PardisoFactor(True, precision="double").solve(k, size * rhs)
+    f = sf.PardisoFactor(True, precision="mixed")
+    x = f.solve(k, size * rhs)
+    assert np.linalg.norm(x - exact) <= 10 * sf.MIXED_RTOL * np.linalg.norm(exact)
+    assert f._single and f.single_failures == 0
+
+
+@pardiso
+def test_a_bad_matrix_or_load_does_not_turn_mixed_precision_off():
+    """An indefinite matrix fails in double precision too (SuperLU answers it): that is the
+    matrix, not the precision, and the next matrix is factorized in single precision again.
+    A non-finite right-hand side has no answer and costs the factors nothing."""
+    k, rhs = block_system(400, 3)
+    bad = (k - 60.0 * sp.eye(k.shape[0], format="csc")).tocsc()
+    bad.sort_indices()
+    f = sf.PardisoFactor(True, precision="mixed")
+    assert_solves(bad, f.solve(bad, rhs), rhs)
+    assert f.fallbacks == 1 and f.single_failures == 0
+    assert_solves(k, f.solve(k, rhs), rhs)
+    assert f._single and f.single_failures == 0
+    done = f.factorizations
+    assert not np.all(np.isfinite(f.solve(k, np.full_like(rhs, np.nan))))
+    assert_solves(k, f.solve(k, rhs), rhs)
+    assert (f.factorizations, f.single_failures, f._single) == (done, 0, True)

@@ -266,7 +266,10 @@ class PardisoFactor(SparseFactor):
 
     A matrix PARDISO refuses (not positive definite, a zero pivot) or whose solution leaves a
     residual above ``RESIDUAL_RTOL`` is solved again by SuperLU, so the answer never depends on
-    which backend could be loaded.
+    which backend could be loaded. A single-precision solution is checked by its refinement
+    instead: each refinement must shrink the correction ``MIXED_CONTRACTION`` times, and the
+    last one leave an estimated error below ``MIXED_RTOL`` of the solution; else the matrix
+    is factorized again in double precision.
     """
 
     name = "pardiso"
@@ -286,11 +289,12 @@ class PardisoFactor(SparseFactor):
         self._data = None  # ... its values as PARDISO was given them (float32 or float64)
         self.fallbacks = 0
         self.single_failures = 0  # single-precision factors sent back to double precision
+        self._in_double = False  # solving a failed single-precision matrix again in double
         self.refinements = 0  # refinements of single-precision solutions done
 
     def wants_single(self, n: int) -> bool:
         """Whether a system of ``n`` unknowns is factorized in single precision."""
-        if self.precision == "double" or self.single_failures:
+        if self.precision == "double" or self.single_failures or self._in_double:
             return False
         return self.precision == "mixed" or n >= MIXED_MIN_UNKNOWNS
 
@@ -319,23 +323,38 @@ class PardisoFactor(SparseFactor):
                 self._factored = a
                 self._data = data
             if single:
+                if not np.all(np.isfinite(b)):  # no answer, whatever the factors
+                    return np.full(len(b), np.nan)
                 sol = self._refined(k, b.reshape(-1))
-                if sol is None:  # back to double precision, for good
-                    self.single_failures += 1
-                    self._pattern = self._values = None
-                    return self.solve(k, rhs)
+                if sol is None:
+                    return self._in_double_precision(k, rhs)
                 return sol
             sol = self._call(33, self._data, b).reshape(-1)
         except PyPardisoError:
             self._pattern = self._values = None
-            if single:  # PARDISO refused the single-precision factors: double precision
-                self.single_failures += 1
-                return self.solve(k, rhs)
+            if single:  # PARDISO refused the single-precision factors
+                return self._in_double_precision(k, rhs)
             sol = None
         if sol is not None and _small_residual(k, sol, rhs):
             return sol
         self.fallbacks += 1
         return superlu_solve(k.full() if isinstance(k, UpperTriangle) else k, rhs)
+
+    def _in_double_precision(self, k, rhs):
+        """The matrix whose single-precision factors failed, factorized in double precision;
+        the holder stays in double precision from then on when that succeeds (when it does
+        not either, as for an indefinite matrix, the matrix was the trouble, not the
+        precision)."""
+        self._pattern = self._values = None
+        fallbacks = self.fallbacks
+        self._in_double = True
+        try:
+            sol = self.solve(k, rhs)
+        finally:
+            self._in_double = False
+        if self.fallbacks == fallbacks:
+            self.single_failures += 1
+        return sol
 
     def _refined(self, k, b: np.ndarray) -> np.ndarray | None:
         """The solution of ``k x = b`` from the single-precision factors, refined in double
@@ -360,9 +379,20 @@ class PardisoFactor(SparseFactor):
         return None
 
     def _apply(self, v: np.ndarray) -> np.ndarray:
-        """A solve with the factors held (in their precision), the answer in double."""
-        b = np.ascontiguousarray(v, dtype=self._data.dtype).reshape(-1, 1)
-        return self._call(33, self._data, b).reshape(-1).astype(float, copy=False)
+        """A solve with the factors held (in their precision), the answer in double. A
+        right-hand side for single-precision factors is scaled to a largest entry near 1
+        first: a refinement's residual of 1e-40 would otherwise round to zero (and one
+        beyond 3e38 overflow)."""
+        v = np.asarray(v, dtype=float).reshape(-1)
+        scale = 1.0
+        if self._data.dtype == np.float32:
+            top = float(np.abs(v).max(initial=0.0))
+            if top == 0.0:
+                return np.zeros_like(v)
+            if np.isfinite(top):  # a power of two: the scaling itself rounds nothing
+                scale = float(np.ldexp(1.0, np.frexp(top)[1]))
+        b = np.ascontiguousarray(v / scale, dtype=self._data.dtype).reshape(-1, 1)
+        return scale * self._call(33, self._data, b).reshape(-1).astype(float, copy=False)
 
     def _call(self, phase: int, data: np.ndarray, b: np.ndarray) -> np.ndarray:
         """PARDISO's one entry point on the analysed pattern (``self._index``), with the
