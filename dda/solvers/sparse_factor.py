@@ -53,14 +53,15 @@ about 1e-15). The refinement stops when the estimated error of the new iterate,
 is below ``MIXED_RTOL`` of :math:`\|x\|`; a refinement that shrinks the correction by less than
 ``MIXED_CONTRACTION`` (an ill-conditioned matrix, a static analysis' loose block), a PARDISO
 error or ``MIXED_REFINEMENTS`` refinements without convergence send the matrix back to a
-double-precision factorization, which the holder keeps from then on. Measured on the stacks'
-systems, one thread: a factorization of 21,600 unknowns 50 -> 32 ms (``L D L^T``) and 100 ->
-65 ms (``L U``), of 5,400 unknowns 7.5 -> 5.2 and 16 -> 11.2 ms, of 2,400 unknowns 2.1 -> 1.5
-ms. With the refinement's second solve and product, a factorization and its solve (median of
-the steps' systems, both kinds) take 8.08 -> 7.15 ms at 5,400 unknowns, 2.52 -> 2.17 at 2,400,
-1.74 -> 1.51 at 1,734, 0.88 -> 0.85 at 1,014 and 0.50 -> 0.52 at 600: hence
-``MIXED_MIN_UNKNOWNS``. ``DDA_PARDISO_PRECISION`` (``auto``, ``double`` or ``mixed``)
-overrides the choice.
+double-precision factorization; when that one succeeds the holder stays in double precision
+from then on (when it fails too, as for an indefinite matrix, the matrix was the trouble).
+Measured on the stacks' systems, one thread: a factorization of 21,600 unknowns 50 -> 32 ms
+(``L D L^T``) and 100 -> 65 ms (``L U``), of 5,400 unknowns 7.5 -> 5.2 and 16 -> 11.2 ms, of
+2,400 unknowns 2.1 -> 1.5 ms. With the refinement's second solve and product, a factorization
+and its solve (median of the steps' systems, both kinds) take 8.08 -> 7.15 ms at 5,400
+unknowns, 2.52 -> 2.17 at 2,400, 1.74 -> 1.51 at 1,734, 0.88 -> 0.85 at 1,014 and 0.50 -> 0.52
+at 600: hence ``MIXED_MIN_UNKNOWNS``. ``DDA_PARDISO_PRECISION`` (``auto``, ``double`` or
+``mixed``) overrides the choice.
 
 :func:`default_backend` picks ``pardiso`` when it can be loaded, else ``superlu``; the
 environment variable ``DDA_SPARSE_SOLVER`` (``pardiso`` or ``superlu``) overrides the choice.
