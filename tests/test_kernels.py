@@ -10,6 +10,7 @@ import scipy.sparse as sp
 from dda.contact.kinematics import trial_kinematics
 from dda.contact.tangent import consistent_tangent, spring_stiffness
 from dda.kernels import PairStiffness
+from dda.kernels.assembly import upper_update
 from dda.solvers.linear import DENSE_LIMIT, SystemPattern, assemble_and_solve
 
 
@@ -223,6 +224,7 @@ def test_upper_triangle_is_assembled_in_place_with_the_full_matrixs_bits():
     c = [c[0], c[np.flatnonzero(pattern._upper_layout[4][2, 1, c]
                                 != pattern._upper_layout[4][2, 1, c[0]])[0]]]
     pattern._upper_layout[4][:, 1, c] = pattern._upper_layout[4][:, 1, c[::-1]]
+    pattern.__dict__.pop("_last_upper")  # (the same springs would reuse the last sums)
     assert not np.array_equal(pattern.upper_matrix(s["block_k"], s["pair_k"]).csr.data,
                               ref.data)
 
@@ -239,6 +241,53 @@ def test_upper_triangle_only_where_it_applies():
     rigid = random_system(90, 400, rng, rigid=True)
     assert SystemPattern(rigid["free"], rigid["bj"], rigid["bk"], rigid["rigid"]).upper_matrix(
         rigid["block_k"], rigid["pair_k"]) is None
+
+
+def test_upper_triangle_of_a_later_pass_adds_the_changed_contacts_only(monkeypatch):
+    """An OPEN-CLOSE pass that changes a few contacts' springs gets the last pass's upper
+    triangle plus their change (:func:`dda.kernels.assembly.upper_update`): the matrix summed
+    whole, to round-off; whole again when many changed, or the step's blocks or contacts are
+    others."""
+    import dda.solvers.linear as linear
+
+    rng = np.random.default_rng(8)
+    s = symmetric_system(rng)
+    pattern = SystemPattern(s["free"], s["bj"], s["bk"])
+    k = s["pair_k"]
+    first = pattern.upper_matrix(s["block_k"], k)
+    calls = []
+    monkeypatch.setattr(linear, "upper_update", lambda *a: calls.append(a) or upper_update(*a))
+    weights = k.weights.copy()
+    changed = rng.choice(len(weights), 12, replace=False)
+    weights[changed[:6]] = 0.0  # six contacts open ...
+    weights[changed[6:], 1] *= 3.0  # ... and six change a spring
+    later = PairStiffness.checked_by_caller(k.rows, k.terms, weights)
+    got = pattern.upper_matrix(s["block_k"], later)
+    assert len(calls) == 1 and sorted(calls[0][-1]) == sorted(changed)
+    fresh = SystemPattern(s["free"], s["bj"], s["bk"]).upper_matrix(s["block_k"], later)
+    scale = np.abs(fresh.csr.data).max()
+    np.testing.assert_allclose(got.csr.data, fresh.csr.data, rtol=0, atol=1e-14 * scale)
+    assert np.abs(got.csr.data - first.csr.data).max() > 1e-3 * scale
+    # the last pass's matrix is not changed under its holder (PARDISO may still use it)
+    np.testing.assert_array_equal(first.csr.data, SystemPattern(
+        s["free"], s["bj"], s["bk"]).upper_matrix(s["block_k"], k).csr.data)
+    # a third of the contacts changed: summed whole, the bits of the whole sum
+    many = weights.copy()
+    many[: len(many) // 3] *= 2.0
+    again = pattern.upper_matrix(s["block_k"], PairStiffness.checked_by_caller(
+        k.rows, k.terms, many))
+    assert len(calls) == 1
+    np.testing.assert_array_equal(again.csr.data, SystemPattern(
+        s["free"], s["bj"], s["bk"]).upper_matrix(s["block_k"], PairStiffness.checked_by_caller(
+            k.rows, k.terms, many)).csr.data)
+    # another step's blocks (another array, the same values): summed whole
+    pattern.upper_matrix(s["block_k"].copy(), later)
+    assert len(calls) == 1
+    # off: every pass summed whole
+    monkeypatch.setattr(linear, "INCREMENTAL_UPPER", False)
+    pattern.upper_matrix(s["block_k"].copy(), k)
+    pattern.upper_matrix(s["block_k"], later)
+    assert len(calls) == 1
 
 
 def test_pardiso_solves_the_upper_triangle_as_the_full_matrix():

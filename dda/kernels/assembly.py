@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["matrix_data", "upper_data", "rhs_data", "add_pair_vectors", "newton_residuals"]
+__all__ = ["matrix_data", "upper_data", "upper_update", "rhs_data", "add_pair_vectors",
+           "newton_residuals"]
 
 
 @njit(cache=True)
@@ -132,6 +133,33 @@ def upper_data(nnz, block_start, block_count, block_k, free_blocks, pair_start, 
                 _diagonal_coupling(k, rows, terms, weights, c, a6)
             else:
                 coupling_block(k, rows, terms, weights, c, a6, b6)
+            _upper_add(data, k, start, pair_count[ab, c], rank)
+    return data
+
+
+@njit(cache=True)
+def upper_update(data, pair_start, pair_count, pair_rank, rows, terms, delta, changed):
+    """Add to the upper-triangle CSR ``data`` (:func:`upper_data`'s, in place) the change of
+    the contacts ``changed`` whose rank-one terms' weights changed by ``delta`` (m, T):
+
+        data += sum_(c in changed) sum_t delta_ct r_c,u(t) r_c,v(t)^T   (upper blocks)
+
+    The matrix is linear in the weights, so this is the matrix of the new weights, but for
+    round-off (the sums come in another order than :func:`upper_data`'s).
+    """
+    k = np.empty((6, 6))
+    for ab in range(4):
+        a6, b6 = 6 * (ab // 2), 6 * (ab % 2)
+        for q in range(changed.shape[0]):
+            c = changed[q]
+            start = pair_start[ab, c]
+            if start < 0:
+                continue
+            rank = pair_rank[ab, c]
+            if rank < 0:
+                _diagonal_coupling(k, rows, terms, delta, c, a6)
+            else:
+                coupling_block(k, rows, terms, delta, c, a6, b6)
             _upper_add(data, k, start, pair_count[ab, c], rank)
     return data
 

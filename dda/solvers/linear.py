@@ -13,7 +13,13 @@ from functools import cached_property
 import numpy as np
 import scipy.sparse as sp
 
-from dda.kernels.assembly import add_pair_vectors, matrix_data, rhs_data, upper_data
+from dda.kernels.assembly import (
+    add_pair_vectors,
+    matrix_data,
+    rhs_data,
+    upper_data,
+    upper_update,
+)
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.profiling import count_solve, section
 from dda.solvers.sparse_factor import (
@@ -27,6 +33,11 @@ __all__ = ["assemble_and_solve", "assemble_vector", "SystemPattern", "DENSE_LIMI
            "SingularSystemError"]
 
 DENSE_LIMIT = 300
+#: whether the symmetric matrix of an OPEN-CLOSE pass is summed as the last pass's plus the
+#: change of the contacts whose springs changed (:meth:`SystemPattern.upper_matrix`) ...
+INCREMENTAL_UPPER = True
+#: ... when at most this share of the contacts changed (else summed whole)
+INCREMENTAL_SHARE = 0.25
 # a kept sparse structure is given up when it has more than this many times the block entries
 # the step's contacts need (the explicit zeros cost fill and time)
 STRUCTURE_SLACK = 2.0
@@ -215,10 +226,26 @@ class SystemPattern:
                 or not isinstance(pair_k, PairStiffness)):
             return None
         nnz, indptr, indices, block, pair = self._upper_layout
-        data = upper_data(nnz, block[0], block[1],
-                          np.ascontiguousarray(block_k, dtype=np.float64), self.free_blocks,
-                          pair[0], pair[1], pair[2], pair_k.rows, pair_k.terms,
-                          pair_k.weights)
+        weights = pair_k.weights
+        last = self.__dict__.get("_last_upper")
+        data = None
+        if (INCREMENTAL_UPPER and last is not None and last[0] is block_k
+                and last[1] is pair_k.rows and last[2] is pair_k.terms
+                and last[3].shape == weights.shape):
+            # the same step's blocks and contacts: only the contacts whose springs changed
+            # (an OPEN-CLOSE pass switches a few) are summed again, as a change of the last
+            changed = np.flatnonzero((weights != last[3]).any(axis=1))
+            if len(changed) <= INCREMENTAL_SHARE * len(weights):
+                data = upper_update(last[4].copy(), pair[0], pair[1], pair[2], pair_k.rows,
+                                    pair_k.terms, weights - last[3], changed)
+        if data is None:
+            data = upper_data(nnz, block[0], block[1],
+                              np.ascontiguousarray(block_k, dtype=np.float64),
+                              self.free_blocks, pair[0], pair[1], pair[2], pair_k.rows,
+                              pair_k.terms, weights)
+        if INCREMENTAL_UPPER:
+            self.__dict__["_last_upper"] = (block_k, pair_k.rows, pair_k.terms, weights.copy(),
+                                            data)
         return UpperTriangle(sp.csr_matrix((data, indices, indptr), shape=(self.n, self.n)))
 
     @cached_property
