@@ -370,3 +370,37 @@ def test_a_bad_matrix_or_load_does_not_turn_mixed_precision_off():
     assert not np.all(np.isfinite(f.solve(k, np.full_like(rhs, np.nan))))
     assert_solves(k, f.solve(k, rhs), rhs)
     assert (f.factorizations, f.single_failures, f._single) == (done, 0, True)
+
+
+def test_an_upper_triangle_multiplies_as_the_whole_symmetric_matrix():
+    """The compiled product with a matrix stored as its upper triangle (one pass, each entry
+    read once) is the whole matrix's product: rows with and without a stored diagonal, empty
+    rows, a dense row."""
+    from dda.kernels.sparse_products import upper_symmetric_matvec
+
+    rng = np.random.default_rng(3)
+    n = 40
+    a = sp.random(n, n, density=0.15, random_state=4, format="csr")
+    a = a + a.T + sp.diags(rng.uniform(1.0, 2.0, n))
+    a = a.tolil()
+    a[5, :] = 0.0  # an empty row (and column)
+    a[:, 5] = 0.0
+    a[7, 7] = 0.0  # a row without a diagonal entry
+    row = rng.standard_normal(n)
+    a[0, :] = row  # a dense row (and column)
+    a[:, 0] = row[:, None]
+    full = sp.csr_matrix(a)
+    upper = sp.triu(full, format="csr")
+    upper.eliminate_zeros()
+    upper.sort_indices()
+    assert upper.indices[upper.indptr[7]] != 7
+    x = rng.standard_normal(n)
+    want = full.toarray() @ x
+    got = upper_symmetric_matvec(upper.indptr, upper.indices, upper.data, x)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-13 * np.abs(want).max())
+    np.testing.assert_allclose(sf.UpperTriangle(upper) @ x, want, rtol=0,
+                               atol=1e-13 * np.abs(want).max())
+    # a block of right-hand sides takes scipy's products, the same numbers
+    xs = rng.standard_normal((n, 3))
+    np.testing.assert_allclose(sf.UpperTriangle(upper) @ xs, full.toarray() @ xs, rtol=0,
+                               atol=1e-13 * np.abs(want).max())

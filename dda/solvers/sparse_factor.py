@@ -76,6 +76,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from dda.kernels.sparse_products import upper_symmetric_matvec
+
 __all__ = ["SparseFactor", "UpperTriangle", "SuperLUFactor", "PardisoFactor", "FactorSet",
            "default_backend", "default_precision", "make_factor", "BACKENDS", "PRECISIONS",
            "SingularSystemError"]
@@ -122,9 +124,14 @@ class UpperTriangle:
         return self.csr.shape
 
     def __matmul__(self, x):
-        # K x = (U + U^T - diag(U)) x
         u = self.csr
-        return u @ x + u.T @ x - u.diagonal() * x
+        x = np.asarray(x)
+        if x.ndim == 1 and u.dtype == np.float64:  # one compiled pass over the data
+            return upper_symmetric_matvec(u.indptr, u.indices, u.data,
+                                          np.ascontiguousarray(x, dtype=np.float64))
+        # K x = (U + U^T - diag(U)) x
+        diagonal = u.diagonal()
+        return u @ x + u.T @ x - (diagonal if x.ndim == 1 else diagonal[:, None]) * x
 
     def full(self) -> sp.csc_matrix:
         """The whole matrix (CSC, sorted indices)."""
@@ -286,7 +293,7 @@ class PardisoFactor(SparseFactor):
         self._used = False  # whether PARDISO holds memory under the handle
         self._csr = None  # (CSC -> CSR data order, indptr, indices) of the last pattern
         self._values = None  # the values of the matrix factorized last
-        self._factored = None  # ... and the matrix (PARDISO's CSR)
+        self._factored = None  # ... and the matrix (an UpperTriangle, or the CSC given)
         self._data = None  # ... its values as PARDISO was given them (float32 or float64)
         self.fallbacks = 0
         self.single_failures = 0  # single-precision factors sent back to double precision
@@ -321,7 +328,7 @@ class PardisoFactor(SparseFactor):
                 # precision factors are refined here, in double precision
                 self._solver.iparm[7] = 2 if (self._solver.iparm[13] > 0 and not single) else 0
                 self._values = a.data.copy()
-                self._factored = a
+                self._factored = UpperTriangle(a) if self.symmetric else k
                 self._data = data
             if single:
                 if not np.all(np.isfinite(b)):  # no answer, whatever the factors
@@ -426,7 +433,10 @@ class PardisoFactor(SparseFactor):
             indptr, indices = k.csr.indptr, k.csr.indices
             same = (np.array_equal(self._pattern[0], indptr)
                     and np.array_equal(self._pattern[1], indices))
-        else:  # the CSC pattern whose CSR the analysis was of
+        elif not self.symmetric:  # the CSC arrays the analysis was of (as K^T's CSR)
+            same = (np.array_equal(self._pattern[0], k.indptr)
+                    and np.array_equal(self._pattern[1], k.indices))
+        else:  # the CSC pattern whose upper triangle's CSR the analysis was of
             cached = self._csr
             same = cached is not None and (cached[3] is k.indptr or (
                 np.array_equal(cached[3], k.indptr) and np.array_equal(cached[4], k.indices)))
@@ -438,7 +448,6 @@ class PardisoFactor(SparseFactor):
         # round each answer to 1e-7 of it, which the solution GMRES puts together keeps, so
         # they are applied refined to the matrix they factorized
         factored = self._factored
-        factored = UpperTriangle(factored) if self.symmetric else factored
         single = self._single
 
         def apply(v):
@@ -475,6 +484,9 @@ class PardisoFactor(SparseFactor):
         # the analysis has filled iparm with PARDISO's defaults; from here on PARDISO reads
         # them from the array (iparm[0] = 1), so a solve's refinement can be turned off
         s.iparm[0] = 1
+        # a nonsymmetric matrix is given as its transpose (_pardiso_matrix): solve with it
+        # transposed
+        s.iparm[11] = 0 if self.symmetric else 2
         self._pattern = (a.indptr.copy(), a.indices.copy())
 
     def _release(self):
@@ -491,11 +503,17 @@ class PardisoFactor(SparseFactor):
 
     def _pardiso_matrix(self, k):
         """The matrix as PARDISO reads it: CSR with sorted indices, and for type 2 its upper
-        triangle only. The CSC data are put in row order by a permutation that depends on
-        the pattern alone (worked out once per pattern)."""
+        triangle only. A nonsymmetric matrix's CSC arrays are the CSR arrays of its
+        transpose, which PARDISO factorizes and solves transposed (``iparm[11] = 2``, set
+        by :meth:`_analyse`): no reordering. For type 2 the CSC data are put in row order
+        by a permutation that depends on the pattern alone (worked out once per pattern)."""
+        if k.format != "csc":
+            k = k.tocsc()
         if not k.has_sorted_indices:
             k = k.copy()
             k.sort_indices()
+        if not self.symmetric:
+            return sp.csr_matrix((k.data, k.indices, k.indptr), shape=k.shape)
         cached = self._csr
         if cached is None or not (cached[3] is k.indptr or (
                 np.array_equal(cached[3], k.indptr) and np.array_equal(cached[4], k.indices))):
