@@ -24,7 +24,13 @@ PARDISO reads a symmetric matrix as the upper triangle of its rows (CSR); the OP
 passes hand it an :class:`UpperTriangle` summed straight into that layout
 (:meth:`dda.solvers.linear.SystemPattern.upper_matrix`): on the 60 x 60 stack 4.7 ms a pass
 against 9.7 ms for the whole matrix and its reordering (30 x 30: 1.2 against 2.3 ms), with
-the same numbers to the bit.
+the same numbers to the bit (a later pass of the same step adds only the change of the
+contacts whose springs changed to the last pass's, the same matrix to round-off). A
+nonsymmetric matrix (Newton's tangent) goes to PARDISO as its own CSC arrays, which PARDISO
+reads as the CSR of ``K^T``; it factorizes that and solves transposed (``iparm[11] = 2``), so
+nothing is reordered (3 ms a factorization of the 60 x 60 stack's tangent). The
+double-precision products of the refinement below take one compiled pass over the upper
+triangle (:func:`dda.kernels.sparse_products.upper_symmetric_matvec`).
 
 PARDISO's defaults refine every solution by two steps of iterative refinement, which made a
 solve cost a third to a half of a factorization and left the residual where it was (about
