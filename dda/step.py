@@ -382,7 +382,7 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
             int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
             float(getattr(solver, "tol", 1.0)), newton_module.ROUND_OFF,
             newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH, rigid, faces,
-            _FACE_COS)
+            _FACE_COS, bool(newton_module.NOISE_FLOOR))
     if status == FALLBACK:
         return None
     (solver_status, oc_status, oc_passes, passes, iterations, solves, n_pairs, worst, gv, gk,

@@ -201,6 +201,9 @@ class ContactResponse:
     history: dict[str, np.ndarray]
     residual: np.ndarray
     tangent: object  # a callable () -> PairStiffness, or the PairStiffness
+    #: the normal force that decides closed (with an impact dashpot, the spring's and the
+    #: dashpot's; ``t_n`` is the spring's alone), None where not given
+    force: np.ndarray | None = None
 
     @cached_property
     def stiffness(self) -> PairStiffness:
@@ -563,4 +566,4 @@ class ContactElement:
                 return consistent_tangent(kin, self.maps, xi0, np.where(closed, kn, 0.0), kss,
                                           ksn, t_n, t_s, closed)
 
-        return ContactResponse(closed, slipping, spring, t_s, history, residual, tangent)
+        return ContactResponse(closed, slipping, spring, t_s, history, residual, tangent, t_n)

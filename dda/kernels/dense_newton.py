@@ -86,6 +86,38 @@ def _at_round_off(norm, norms, count, floor):
 
 
 @njit(cache=True)
+def _noise_floor(free, rigid, bj, bk, residual, closed, t_n, t_s, kn, gap_tol):
+    """The norm over the free unknowns of the summed residual rows of the closed contacts
+    whose forces are below their stiffness times their gap's round-off
+    (:func:`dda.solvers.newton._at_noise_floor`; the rows summed in its order), or -1 when
+    there are none."""
+    acc = np.zeros((free.shape[0], 6))
+    found = False
+    noise = np.zeros(bj.shape[0], dtype=np.bool_)
+    for c in range(bj.shape[0]):
+        limit = kn[c] * gap_tol[c]
+        if closed[c] and abs(t_n[c]) <= limit and abs(t_s[c]) <= limit:
+            noise[c] = True
+            found = True
+    if not found:
+        return -1.0
+    for c in range(bj.shape[0]):
+        if noise[c]:
+            for i in range(6):
+                acc[bj[c], i] += residual[c, i]
+    for c in range(bk.shape[0]):
+        if noise[c]:
+            for i in range(6):
+                acc[bk[c], i] += residual[c, 6 + i]
+    total = 0.0
+    for b in range(free.shape[0]):
+        if free[b]:
+            for i in range(3 if rigid[b] else 6):
+                total += acc[b, i] * acc[b, i]
+    return math.sqrt(total)
+
+
+@njit(cache=True)
 def _cycle_back(pattern, patterns, count, cycle_length):
     """How many accepted iterates back (2 to ``cycle_length``) ``pattern`` was, or 0."""
     for back in range(2, min(cycle_length, count) + 1):
@@ -99,7 +131,7 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
                  free, rigid, n, block_base, block_step, free_blocks, pair_base, pair_step,
                  side_row, side_block, keep, reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0,
                  shear0, release, has_dashpot, kn, pn, ps, length, kind, mu_s, mu_d, cohesion,
-                 face, g_se, slip, sliding):
+                 face, g_se, slip, sliding, noise_floor, gap_tol):
     """Newton-Raphson iterations of one step on a dense system (module docstring).
 
     Parameters
@@ -120,6 +152,9 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
         force's stiffness (with the dashpot's), the penalties, the edges' lengths
     kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding : the built-in laws per contact
         and the committed history
+    noise_floor, gap_tol : whether an iterate within the out-of-balance of its round-off
+        contacts has converged (:func:`dda.solvers.newton._at_noise_floor`), and the gaps'
+        round-off
 
     Returns
     -------
@@ -166,7 +201,9 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
             block_k, d, block_f, free, rigid, bj, bk, residual)
         norm = _norm(r_free)
         scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
-        if norm <= tol * scale or _at_round_off(norm, norms, n_norms, round_off * scale):
+        if (norm <= tol * scale or _at_round_off(norm, norms, n_norms, round_off * scale)
+                or (noise_floor and norm <= round_off * scale and norm <= _noise_floor(
+                    free, rigid, bj, bk, residual, closed, t_n, t_s, kn, gap_tol))):
             norms[n_norms] = norm
             n_norms += 1
             break
@@ -228,7 +265,8 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
                       free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows,
                       terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot,
                       dashpot, reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se0,
-                      slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0, shear0):
+                      slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0, shear0,
+                      noise_floor):
     """The fully implicit method's whole step on a dense system
     (:meth:`dda.solvers.NewtonRaphson.solve_step`) in one call: the pull-back and first
     states, the predictor (OPEN-CLOSE with the open and closed states settled,
@@ -241,7 +279,8 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
 
     The arguments are :func:`dda.kernels.dense_passes.dense_passes`' from ``block_k`` to
     ``face`` (:func:`dda.solvers.open_close.dense_arguments`), the committed contacts
-    (``state0``, history, ``t_n0``), the gaps' round-off, and :func:`dense_newton`'s own.
+    (``state0``, history, ``t_n0``), the gaps' round-off, and :func:`dense_newton`'s own
+    (``noise_floor`` last).
 
     Returns
     -------
@@ -286,7 +325,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
                                  free_blocks, pair_base, pair_step, side_row, side_block, keep,
                                  reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0, shear0, release,
                                  has_dashpot, kn, pn, ps, length, kind, mu_s, mu_d, cohesion,
-                                 face, g_se0, slip0, sliding0)
+                                 face, g_se0, slip0, sliding0, noise_floor, gap_tol)
         # a solve for every accepted iterate but the last, and for the last when it failed
         solves += norms.shape[0] - 1 + (1 if status >= SINGULAR else 0)
         if status == CONVERGED or friction_settled or oc_status != CONVERGED:
