@@ -114,3 +114,53 @@ def test_a_kept_sparse_structure_serves_fewer_contacts(reads_upper):
     assert new_pair.indices is not first.indices
     few = int(len(bj) / (2 * STRUCTURE_SLACK))
     assert SystemPattern(free, bj[:few], bk[:few], cache=cache).nnz < new_pair.nnz
+
+
+def test_a_kept_structure_is_searched_column_by_column_with_the_same_layout(monkeypatch):
+    """A step whose entries the kept structure holds finds them column by column
+    (dda.kernels.pattern.entry_positions) instead of sorting and searching every key: the
+    same structure, the same places for every block entry and contact coupling, upper
+    triangle included, as the sorted search, over steps whose contacts shrink, grow past the
+    structure, come back and fall below its slack."""
+    from dda.solvers.linear import SystemPattern
+
+    rng = np.random.default_rng(11)
+    n_blocks = 90
+    free = np.ones(n_blocks, dtype=bool)
+    free[[0, 7]] = False
+    bj = rng.integers(0, n_blocks, 400)
+    bk = (bj + rng.integers(1, 6, 400)) % n_blocks
+    steps = [np.arange(400), np.arange(400) % 3 != 0, np.arange(400) % 2 == 0,
+             np.arange(400), np.arange(400) < 60, np.arange(400) < 300]
+    extra = (np.array([3, 50]), np.array([80, 9]))  # a pair the first structure lacks
+    layouts = []
+    found = []
+    search = SystemPattern._in_kept_structure
+    monkeypatch.setattr(SystemPattern, "_in_kept_structure", staticmethod(
+        lambda *a: found.append(search(*a)) or found[-1]))
+    for fast in (True, False):
+        cache = sparse_factor.FactorSet()
+        if not fast:
+            monkeypatch.setattr(cache, "kept_superset", lambda name, n: None)
+        runs = []
+        for i, keep in enumerate(steps):
+            j, k = bj[keep], bk[keep]
+            if i == 3:
+                j, k = np.r_[j, extra[0]], np.r_[k, extra[1]]
+            p = SystemPattern(free, j, k, cache=cache)
+            runs.append((p.nnz, p.indices, p.indptr, p.block_base, p.block_step, p.pair_base,
+                         p.pair_step, *p._upper_layout[:3], *p._upper_layout[3],
+                         *p._upper_layout[4]))
+        layouts.append(runs)
+    kept_hits = 0
+    for i, (a, b) in enumerate(zip(*layouts, strict=True)):
+        assert a[0] == b[0]
+        for x, y in zip(a[1:], b[1:], strict=True):
+            np.testing.assert_array_equal(x, y)
+        kept_hits += i > 0 and layouts[0][i][1] is layouts[0][i - 1][1]
+    assert kept_hits >= 2  # steps 1 and 2 kept the first structure
+    # the column-by-column search answered where the structure was kept (the fast run's
+    # steps 1 and 2; not after a new pair, nor with too few contacts, nor in the slow run)
+    assert [f is not None for f in found[:len(steps)]] == [False, True, True, False, False,
+                                                           False]
+    assert all(f is None for f in found[len(steps):])

@@ -21,6 +21,7 @@ from dda.kernels.assembly import (
     upper_update,
 )
 from dda.kernels.pair_stiffness import PairStiffness
+from dda.kernels.pattern import entry_positions
 from dda.profiling import count_solve, section
 from dda.solvers.sparse_factor import (
     SingularSystemError,
@@ -154,14 +155,38 @@ class SystemPattern:
             ub, inverse = np.unique(keys, return_inverse=True)
             layout = self._csc_structure(ub, nf)
         else:
-            ub = cache.superset("csc", nf, np.unique(keys), STRUCTURE_SLACK)
+            found = self._in_kept_structure(cache, nf, br, bc)
+            if found is not None:  # the kept structure holds every entry (the common step)
+                ub, inverse = found
+            else:
+                ub = cache.superset("csc", nf, np.unique(keys), STRUCTURE_SLACK)
+                inverse = np.searchsorted(ub, keys)
             self._structure_keys = ub
-            inverse = np.searchsorted(ub, keys)
             layout = cache.kept("csc", (np.array([nf]), ub),
                                 lambda: self._csc_structure(ub, nf))
         self.nnz, self.indices, self.indptr, base, step = layout
         self.row_step = 1
         return base[inverse], step[inverse]
+
+    @staticmethod
+    def _in_kept_structure(cache, nf, br, bc):
+        """``(keys, positions)`` of the kept structure when it holds every block entry
+        ``(br, bc)`` and has at most ``STRUCTURE_SLACK`` times the entries they need (what
+        :meth:`FactorSet.superset` would keep, and where each entry lies in it: the same as
+        ``numpy.searchsorted``), found column by column; None otherwise."""
+        kept = cache.kept_superset("csc", nf)
+        if kept is None or len(br) == 0:
+            return None
+        rows, ptr = cache.kept("csc columns", (np.array([nf]), kept), lambda: (
+            kept % nf, np.concatenate([[0], np.cumsum(np.bincount(kept // nf, minlength=nf))])))
+        pos = entry_positions(ptr, rows, bc, br)
+        if pos.min() < 0:
+            return None
+        used = np.zeros(len(kept), dtype=bool)
+        used[pos] = True
+        if len(kept) > STRUCTURE_SLACK * np.count_nonzero(used):
+            return None
+        return kept, pos
 
     @staticmethod
     def _csc_structure(ub, nf):
@@ -266,8 +291,9 @@ class SystemPattern:
         if self._structure_keys is None:
             ub = np.unique((br * nf + bc)[br < bc])
         else:  # the kept structure's upper entries (row * nf + column)
-            col, row = np.divmod(self._structure_keys, nf)
-            ub = np.unique((row * nf + col)[row < col])
+            keys = self._structure_keys
+            ub = self._cache.kept("upper keys", (np.array([nf]), keys),
+                                  lambda: _upper_keys(keys, nf))
         if self._cache is None:
             structure = self._upper_structure(ub, nf)
         else:
@@ -280,8 +306,8 @@ class SystemPattern:
         e_count = count[br]
         e_rank = np.full(len(br), -1, dtype=np.int64)
         up = np.flatnonzero(br < bc)
-        e_rank[up] = np.searchsorted(ub, br[up] * nf + bc[up]) - np.searchsorted(
-            ub, br[up] * nf)
+        row_ptr = np.concatenate([[0], np.cumsum(count)])
+        e_rank[up] = entry_positions(row_ptr, ub % nf, br[up], bc[up]) - row_ptr[br[up]]
         pair = np.full((3, 4, len(self.side_row[0])), -1, dtype=np.int64)
         pair[1] = 0
         first = nf
@@ -363,6 +389,13 @@ class SystemPattern:
                 load = np.einsum("mij,mj->mi", sub, d_known[known_block])
                 rhs -= np.bincount(index, weights=load.reshape(-1), minlength=self.n)
         return rhs
+
+
+def _upper_keys(keys, nf):
+    """The upper entries (row * nf + column, sorted) of a CSC structure's block keys
+    (column * nf + row)."""
+    col, row = np.divmod(keys, nf)
+    return np.sort((row * nf + col)[row < col])
 
 
 def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, pattern=None,

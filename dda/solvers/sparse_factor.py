@@ -685,6 +685,11 @@ class FactorSet:
         self._kept["superset " + name] = (n, needed)
         return needed
 
+    def kept_superset(self, name: str, n: int) -> np.ndarray | None:
+        """The sorted keys :meth:`superset` keeps under ``name`` for ``n``, or None."""
+        last = self._kept.get("superset " + name)
+        return last[1] if last is not None and last[0] == n else None
+
     def get(self, symmetric: bool) -> SparseFactor:
         """The factorization holder for symmetric (or general) matrices."""
         f = self._factors.get(symmetric)
