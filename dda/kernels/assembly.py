@@ -123,18 +123,26 @@ def upper_data(nnz, block_start, block_count, block_k, free_blocks, pair_start, 
         k[:, :] = block_k[free_blocks[s]]
         _upper_add(data, k, block_start[s], block_count[s], -1)
     for ab in range(4):
-        a6, b6 = 6 * (ab // 2), 6 * (ab % 2)
         for c in range(pair_start.shape[1]):
-            start = pair_start[ab, c]
-            if start < 0:
-                continue
-            rank = pair_rank[ab, c]
-            if rank < 0:
-                _diagonal_coupling(k, rows, terms, weights, c, a6)
-            else:
-                coupling_block(k, rows, terms, weights, c, a6, b6)
-            _upper_add(data, k, start, pair_count[ab, c], rank)
+            _upper_coupling(data, k, pair_start, pair_count, pair_rank, rows, terms, weights,
+                            c, ab)
     return data
+
+
+@njit(cache=True)
+def _upper_coupling(data, k, pair_start, pair_count, pair_rank, rows, terms, weights, c, ab):
+    """Add contact c's coupling ``ab`` (its rows' block ``ab // 2``, columns' ``ab % 2``)
+    with ``weights`` to the upper-triangle CSR ``data``, where it lies on or right of the
+    diagonal (``k``: a 6 x 6 work array)."""
+    start = pair_start[ab, c]
+    if start < 0:
+        return
+    rank = pair_rank[ab, c]
+    if rank < 0:
+        _diagonal_coupling(k, rows, terms, weights, c, 6 * (ab // 2))
+    else:
+        coupling_block(k, rows, terms, weights, c, 6 * (ab // 2), 6 * (ab % 2))
+    _upper_add(data, k, start, pair_count[ab, c], rank)
 
 
 @njit(cache=True)
@@ -149,18 +157,9 @@ def upper_update(data, pair_start, pair_count, pair_rank, rows, terms, delta, ch
     """
     k = np.empty((6, 6))
     for ab in range(4):
-        a6, b6 = 6 * (ab // 2), 6 * (ab % 2)
         for q in range(changed.shape[0]):
-            c = changed[q]
-            start = pair_start[ab, c]
-            if start < 0:
-                continue
-            rank = pair_rank[ab, c]
-            if rank < 0:
-                _diagonal_coupling(k, rows, terms, delta, c, a6)
-            else:
-                coupling_block(k, rows, terms, delta, c, a6, b6)
-            _upper_add(data, k, start, pair_count[ab, c], rank)
+            _upper_coupling(data, k, pair_start, pair_count, pair_rank, rows, terms, delta,
+                            changed[q], ab)
     return data
 
 
