@@ -10,7 +10,7 @@ import scipy.sparse as sp
 from dda.contact.kinematics import trial_kinematics
 from dda.contact.tangent import consistent_tangent, spring_stiffness
 from dda.kernels import PairStiffness
-from dda.kernels.assembly import upper_update
+from dda.kernels.assembly import contact_matrix, upper_update
 from dda.solvers.linear import DENSE_LIMIT, SystemPattern, assemble_and_solve
 
 
@@ -149,6 +149,28 @@ def test_pair_stiffness_is_its_array():
         PairStiffness(rows, [[0, 1]], w)
     with pytest.raises(ValueError, match="outside"):
         PairStiffness(rows, [[0, 2], [1, 0], [1, 1]], w)
+
+
+def test_contact_matrix_is_the_pair_stiffness_and_symmetric_springs_stay_symmetric():
+    """The assembly's per-contact 12 x 12 matrix equals :meth:`PairStiffness.dense` to
+    round-off (terms of weight 0 skipped); one of terms that pair each row with itself is
+    symmetric to the bit."""
+    rng = np.random.default_rng(11)
+    k = random_system(12, 40, rng)["pair_k"]
+    k.weights[::3, 0] = 0.0
+    out = np.empty((12, 12))
+    dense = k.dense()
+    for c in range(len(k)):
+        contact_matrix(out, k.rows, k.terms, k.weights, c)
+        np.testing.assert_allclose(out, dense[c], rtol=0,
+                                   atol=1e-14 * np.abs(dense[c]).max())
+    springs = PairStiffness(rng.normal(size=(40, 2, 12)), [[0, 0], [1, 1]],
+                            np.abs(rng.normal(size=(40, 2))) * 1e9)
+    for c in range(40):
+        contact_matrix(out, springs.rows, springs.terms, springs.weights, c)
+        assert np.array_equal(out, out.T)
+        np.testing.assert_allclose(out, springs.dense()[c], rtol=0,
+                                   atol=1e-14 * np.abs(out).max())
 
 
 def test_springs_are_the_legacy_outer_products():
