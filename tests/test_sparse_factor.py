@@ -123,8 +123,9 @@ def test_a_stack_settles_alike_with_either_backend(monkeypatch, solver):
 
 @pytest.mark.parametrize("backend", ["superlu", pytest.param("pardiso", marks=pardiso)])
 def test_the_same_matrix_is_factorized_once(backend):
-    """Passes that change loads only solve with the factorization they have; a matrix with
-    other values (same pattern) is factorized again."""
+    """Passes that change loads only solve with the factorization they have, whether they
+    give the same matrix or an equal one; a matrix with other values (same pattern) is
+    factorized again."""
     f = sf.make_factor(backend, symmetric=True)
     k, rhs = block_system(60, 1)
     for scale in (1.0, -2.0, 0.5):
@@ -133,6 +134,8 @@ def test_the_same_matrix_is_factorized_once(backend):
     k2 = k.copy()
     k2.data[0] *= 1.5
     assert_solves(k2, f.solve(k2, rhs), rhs)
+    assert f.factorizations == 2
+    assert_solves(k2, f.solve(k2.copy(), 2.0 * rhs), 2.0 * rhs)  # equal arrays, not the same
     assert f.factorizations == 2
 
 
