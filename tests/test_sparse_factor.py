@@ -407,3 +407,74 @@ def test_an_upper_triangle_multiplies_as_the_whole_symmetric_matrix():
     xs = rng.standard_normal((n, 3))
     np.testing.assert_allclose(sf.UpperTriangle(upper) @ xs, full.toarray() @ xs, rtol=0,
                                atol=1e-13 * np.abs(want).max())
+
+
+def _spring_system(monkeypatch):
+    """A symmetric system of 1,800 unknowns (single precision) from legacy springs, its
+    pattern and springs."""
+    from dda.kernels import PairStiffness
+    from dda.solvers.linear import SystemPattern
+    from tests.test_kernels import random_system
+
+    monkeypatch.setattr(sf, "MIXED_MIN_UNKNOWNS", 1200)
+    rng = np.random.default_rng(12)
+    s = random_system(300, 900, rng)
+    k = PairStiffness(rng.normal(size=(900, 2, 12)), [[0, 0], [1, 1]],
+                      np.abs(rng.normal(size=(900, 2))) * 1e3)
+    return s, SystemPattern(s["free"], s["bj"], s["bk"]), k
+
+
+@pardiso
+@pytest.mark.parametrize("changed, low_rank", [(4, True), (17, False)])
+def test_a_few_changed_springs_update_the_factors(monkeypatch, changed, low_rank):
+    """An OPEN-CLOSE pass whose springs differ from the factorized matrix's in at most
+    LOW_RANK_TERMS terms is solved by the Woodbury update of those factors, to the accuracy
+    of a new factorization; more changes, or the option off, factorize."""
+    from dda.kernels import PairStiffness
+
+    s, pattern, k = _spring_system(monkeypatch)
+    f = sf.make_factor("pardiso", symmetric=True)
+    rhs = np.random.default_rng(3).normal(size=pattern.n)
+    first = pattern.upper_matrix(s["block_k"], k)
+    assert_solves(first.full(), f.solve(first, rhs), rhs)
+    assert (f.factorizations, f.low_rank_solves) == (1, 0)
+    w = k.weights.copy()
+    # springs opened (weight 0), stiffened and softened: `changed` terms in all
+    terms = [(c, t) for c in range(0, 3 * changed, 3) for t in (0,)][:changed]
+    for i, (c, t) in enumerate(terms):
+        w[c, t] = (0.0, 3.0 * w[c, t], 0.5 * w[c, t])[i % 3]
+    later = pattern.upper_matrix(s["block_k"], PairStiffness.checked_by_caller(k.rows, k.terms, w))
+    assert (later.change is not None) == low_rank
+    x = f.solve(later, rhs)
+    fresh = sf.make_factor("pardiso", symmetric=True).solve(later, rhs)
+    np.testing.assert_allclose(x, fresh, rtol=0, atol=1e-11 * np.abs(fresh).max())
+    assert_solves(later.full(), x, rhs)
+    assert (f.factorizations, f.low_rank_solves) == ((1, 1) if low_rank else (2, 0))
+    # the option off: the same change is factorized
+    g = sf.make_factor("pardiso", symmetric=True)
+    g.low_rank = False
+    g.solve(pattern.upper_matrix(s["block_k"], k), rhs)
+    g.solve(pattern.upper_matrix(s["block_k"], PairStiffness.checked_by_caller(
+        k.rows, k.terms, w)), rhs)
+    assert (g.factorizations, g.low_rank_solves) == (2, 0)
+
+
+@pardiso
+def test_a_wrong_low_rank_change_falls_back_to_a_factorization(monkeypatch):
+    """A change that does not describe the matrix (here: the springs' weights misstated)
+    does not pass the refinement, whose residuals are the matrix's own: the matrix is
+    factorized and solved exactly."""
+    from dda.kernels import PairStiffness
+
+    s, pattern, k = _spring_system(monkeypatch)
+    f = sf.make_factor("pardiso", symmetric=True)
+    rhs = np.random.default_rng(4).normal(size=pattern.n)
+    f.solve(pattern.upper_matrix(s["block_k"], k), rhs)
+    w = k.weights.copy()
+    w[:3, 0] *= 50.0
+    later = pattern.upper_matrix(s["block_k"], PairStiffness.checked_by_caller(k.rows, k.terms, w))
+    base, rows, u, lam = later.change
+    later.change = (base, rows, u, -0.5 * lam)
+    x = f.solve(later, rhs)
+    assert_solves(later.full(), x, rhs)
+    assert (f.factorizations, f.low_rank_solves) == (2, 0)

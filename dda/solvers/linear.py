@@ -23,6 +23,7 @@ from dda.kernels.assembly import (
 from dda.kernels.pair_stiffness import PairStiffness
 from dda.kernels.pattern import entry_positions
 from dda.profiling import count_solve, section
+from dda.solvers import sparse_factor
 from dda.solvers.sparse_factor import (
     SingularSystemError,
     SparseFactor,
@@ -261,7 +262,7 @@ class SystemPattern:
         nnz, indptr, indices, block, pair = self._upper_layout
         weights = pair_k.weights
         last = self.__dict__.get("_last_upper")
-        data = None
+        data = change = None
         if (INCREMENTAL_UPPER and last is not None and last[0] is block_k
                 and last[1] is pair_k.rows and last[2] is pair_k.terms
                 and last[3].shape == weights.shape):
@@ -271,15 +272,44 @@ class SystemPattern:
             if len(changed) <= INCREMENTAL_SHARE * len(weights):
                 data = upper_update(last[4].copy(), pair[0], pair[1], pair[2], pair_k.rows,
                                     pair_k.terms, weights - last[3], changed)
+                change = self._low_rank_change(last[4], pair_k, weights - last[3], changed)
         if data is None:
             data = upper_data(nnz, block[0], block[1],
                               np.ascontiguousarray(block_k, dtype=np.float64),
                               self.free_blocks, pair[0], pair[1], pair[2], pair_k.rows,
                               pair_k.terms, weights)
+        k = UpperTriangle(sp.csr_matrix((data, indices, indptr), shape=(self.n, self.n)),
+                          change)
         if INCREMENTAL_UPPER:
             self.__dict__["_last_upper"] = (block_k, pair_k.rows, pair_k.terms, weights.copy(),
-                                            data)
-        return UpperTriangle(sp.csr_matrix((data, indices, indptr), shape=(self.n, self.n)))
+                                            k.csr.data)
+        return k
+
+    def _low_rank_change(self, base, pair_k, delta, changed):
+        """The change from the matrix whose upper-triangle data is ``base`` as
+        ``(base, rows, u, lam)``: ``Delta = P u diag(lam) u^T P^T`` with ``P`` the unknowns
+        ``rows``, one column of ``u`` per changed weight ``lam`` of a term that pairs a row with
+        itself (a legacy spring: ``lam r r^T``). None when a changed term pairs two rows
+        or more terms changed than ``sparse_factor.LOW_RANK_TERMS``."""
+        terms = pair_k.terms
+        d = delta[changed]
+        c_idx, t_idx = np.nonzero(d)
+        if (len(c_idx) > sparse_factor.LOW_RANK_TERMS
+                or np.any(terms[t_idx, 0] != terms[t_idx, 1])):
+            return None
+        contacts = changed[c_idx]
+        start = self.side_row[:, contacts]  # (2, r): each side's first unknown, or -1
+        rows = np.unique(start[start >= 0])
+        rows = (rows[:, None] + np.arange(6)).reshape(-1)
+        u = np.zeros((len(rows), len(contacts)))
+        vec = pair_k.rows[contacts, terms[t_idx, 0]]  # (r, 12)
+        col = np.arange(len(contacts))
+        for a in range(2):
+            has = start[a] >= 0
+            at = np.searchsorted(rows, start[a, has])
+            for i in range(6):
+                u[at + i, col[has]] = vec[has, 6 * a + i]
+        return base, rows, u, d[c_idx, t_idx]
 
     @cached_property
     def _upper_layout(self):

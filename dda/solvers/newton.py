@@ -85,6 +85,13 @@ NEAR_SWITCHES = 4
 # 220, 270, 135 N, 293, ... on a pile of 1,000 blocks); on three such piles (0.2 s) the
 # longer cycles took the cut steps from 67 / 65 / 58 to 30 / 32 / 40
 CYCLE_LENGTH = 8
+# whether the predictor's passes may solve by a low-rank update of the last factorization
+# (dda.solvers.sparse_factor.LOW_RANK_TERMS): off, for on the 60 x 60 stack of
+# benchmarks/stacks.py it took the median step from 391-433 to 350-415 ms (seven runs, gravity
+# changed by 0 to 6e-12) but 4 of the 7 runs cut a step (without it: none), each a
+# friction-settled predictor in which one contact switched between stick and slip in every
+# pass until the limit
+PREDICTOR_LOW_RANK = False
 
 
 class NewtonRaphson(NonlinearSolver):
@@ -145,6 +152,9 @@ class NewtonRaphson(NonlinearSolver):
         # the predictor: OPEN-CLOSE with the open and closed states settled; only when Newton
         # does not converge from it are the stick and slip states settled too
         passes = 0
+        sym = problem.factor(True)
+        if sym is not None:
+            sym.low_rank = PREDICTOR_LOW_RANK
         for settle_friction in (False, True):
             oc = open_close(problem, explicit=False, settle_friction=settle_friction)
             passes += oc.passes

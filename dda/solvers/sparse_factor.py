@@ -109,6 +109,11 @@ MIXED_RTOL = 1e-12
 MIXED_REFINEMENTS = 4
 MIXED_CONTRACTION = 1e-2
 PRECISIONS = ("auto", "double", "mixed")
+# a single-precision L D L^T whose matrix changed since by at most this many springs solves
+# the new matrix by a low-rank (Woodbury) update of those factors instead of a new
+# factorization (PardisoFactor._low_rank_solve); LOW_RANK False: never
+LOW_RANK = True
+LOW_RANK_TERMS = 16
 
 
 class SingularSystemError(RuntimeError):
@@ -118,12 +123,19 @@ class SingularSystemError(RuntimeError):
 class UpperTriangle:
     """A symmetric matrix given by its upper triangle, ``csr`` (CSR, sorted indices): what
     PARDISO reads for a symmetric matrix, assembled in that layout by
-    :meth:`dda.solvers.linear.SystemPattern.upper_matrix`."""
+    :meth:`dda.solvers.linear.SystemPattern.upper_matrix`.
 
-    __slots__ = ("csr",)
+    ``change``, when known, is ``(base, rows, u, lam)``: this matrix is the one whose
+    upper-triangle data is the array ``base`` plus ``P u diag(lam) u^T P^T``, with ``P`` the
+    unknowns ``rows`` (those of the contacts whose springs changed since the last OPEN-CLOSE
+    pass; ``u`` one column per changed spring), which a factorization of ``base`` takes as a
+    low-rank update (:meth:`PardisoFactor.solve`)."""
 
-    def __init__(self, csr: sp.csr_matrix):
+    __slots__ = ("csr", "change")
+
+    def __init__(self, csr: sp.csr_matrix, change: tuple | None = None):
         self.csr = csr
+        self.change = change
 
     @property
     def shape(self):
@@ -159,6 +171,9 @@ class SparseFactor:
 
     name = "sparse"
     reads_upper = False
+    # whether a solve may update the last factorization by a low-rank change of the matrix
+    # instead of factorizing it (a backend that can: PardisoFactor)
+    low_rank = True
 
     def __init__(self, symmetric: bool = False):
         self.symmetric = symmetric
@@ -315,6 +330,7 @@ class PardisoFactor(SparseFactor):
         self.single_failures = 0  # single-precision factors sent back to double precision
         self._in_double = False  # solving a failed single-precision matrix again in double
         self.refinements = 0  # refinements of single-precision solutions done
+        self.low_rank_solves = 0  # solves by a low-rank update of the last factors
 
     def wants_single(self, n: int) -> bool:
         """Whether a system of ``n`` unknowns is factorized in single precision."""
@@ -334,6 +350,15 @@ class PardisoFactor(SparseFactor):
         try:
             if not same:
                 self._analyse(a, single)
+            if (same and single and LOW_RANK and self.low_rank and self.symmetric
+                    and self._values is not None
+                    and isinstance(k, UpperTriangle) and k.change is not None
+                    and k.change[0] is self._values):
+                if not np.all(np.isfinite(b)):
+                    return np.full(len(b), np.nan)
+                sol = self._low_rank_solve(k, b.reshape(-1), *k.change[1:])
+                if sol is not None:
+                    return sol
             if not (same and self._values is not None and _same_array(self._values, a.data)):
                 self._values = None
                 data = a.data.astype(np.float32) if single else a.data
@@ -380,15 +405,17 @@ class PardisoFactor(SparseFactor):
             self.single_failures += 1
         return sol
 
-    def _refined(self, k, b: np.ndarray) -> np.ndarray | None:
-        """The solution of ``k x = b`` from the single-precision factors, refined in double
-        precision (module docstring); None when the refinement does not converge."""
-        x = self._apply(b)
+    def _refined(self, k, b: np.ndarray, apply=None) -> np.ndarray | None:
+        """The solution of ``k x = b`` from the single-precision factors (or the approximate
+        inverse ``apply``), refined in double precision (module docstring); None when the
+        refinement does not converge."""
+        apply = apply or self._apply
+        x = apply(b)
         last = float(np.linalg.norm(x))
         if not np.isfinite(last):
             return None
         for i in range(MIXED_REFINEMENTS):
-            dx = self._apply(b - k @ x)
+            dx = apply(b - k @ x)
             x = x + dx
             step = float(np.linalg.norm(dx))
             if not np.isfinite(step):
@@ -401,6 +428,51 @@ class PardisoFactor(SparseFactor):
                 return x
             last = step
         return None
+
+    def _low_rank_solve(self, k: UpperTriangle, b: np.ndarray, rows: np.ndarray,
+                        u: np.ndarray, lam: np.ndarray):
+        r"""Solve the symmetric ``k x = b`` with the factors of the matrix ``A`` factorized
+        last, where ``k = A + U \Lambda U^T`` (``U`` zero but in the rows ``rows``, where it
+        is ``u``; ``\Lambda = diag(lam)``, the changed springs): the Sherman-Morrison-
+        Woodbury formula
+
+        .. math::
+
+            Z = A^{-1} U, \qquad
+            k^{-1} v = A^{-1} v - Z (\Lambda^{-1} + U^T Z)^{-1} U^T A^{-1} v,
+
+        as the approximate inverse of :meth:`_refined`, whose residuals are those of ``k``
+        itself. ``Z`` is one solve with a right-hand side per changed spring. On the
+        60 x 60 stack's 21,600 unknowns 8 right-hand sides take 6.4 ms, 16 take 12 ms, and a
+        factorization 32 ms. None (then ``k`` is factorized) when the update is singular or
+        the refinement does not converge."""
+        if len(lam) == 0:
+            return self._refined(k, b)
+        full = np.zeros((len(b), len(lam)))
+        full[rows] = u
+        z = self._apply_many(full)
+        try:
+            inverse = np.linalg.inv(np.diag(1.0 / lam) + u.T @ z[rows])
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(inverse)):
+            return None
+
+        def apply(v):
+            y = self._apply(v)
+            return y - z @ (inverse @ (u.T @ y[rows]))
+
+        sol = self._refined(k, b, apply)
+        if sol is not None:
+            self.low_rank_solves += 1
+        return sol
+
+    def _apply_many(self, v: np.ndarray) -> np.ndarray:
+        """:meth:`_apply` of the columns of ``v`` (n, r) in one solve."""
+        top = float(np.abs(v).max(initial=0.0))
+        scale = float(np.ldexp(1.0, np.frexp(top)[1])) if top > 0.0 else 1.0
+        b = np.asfortranarray(v / scale, dtype=self._data.dtype)
+        return scale * self._call(33, self._data, b).astype(float, copy=False)
 
     def _apply(self, v: np.ndarray) -> np.ndarray:
         """A solve with the factors held (in their precision), the answer in double. A
