@@ -189,3 +189,45 @@ def test_a_newton_step_in_one_call_settles_friction_when_it_must(max_iter, tol, 
     assert a.residual_norms == b.residual_norms
     if a.converged:
         np.testing.assert_array_equal(a.d, b.d)
+
+
+@pytest.mark.parametrize("patience", [1, 2, 10**6])
+def test_the_retry_hands_over_after_its_patience_alike(patience, monkeypatch):
+    """The friction-settled retry of the predictor (the 3 x 3 stack's fourth step, Newton
+    allowed no iteration from the looser predictor) counts as settled, its friction not, once
+    ``RETRY_PATIENCE`` passes in a row have opened or closed no contact, and Newton then takes
+    its whole budget; in one kernel call as in turn: the same passes, iterations, solves and
+    answer. Off (a patience beyond the passes) the retry settles its friction, in more passes.
+    Legacy DDA has no such rule."""
+    problem = _stack_step_problem(3)
+    monkeypatch.setattr(newton, "PREDICTOR_ITERATIONS", 0)
+    monkeypatch.setattr(open_close, "RETRY_PATIENCE", patience)
+    assert open_close.predictor_patience(True, True) == 0
+    assert open_close.predictor_patience(False, True) == patience
+    out = []
+    for fused in (False, True):
+        monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", fused)
+        calls = []
+        original = open_close.open_close
+
+        def counted(*args, original=original, calls=calls, **kw):
+            result = original(*args, **kw)
+            calls.append((kw.get("settle_friction"), result.passes, result.friction_settled))
+            return result
+
+        monkeypatch.setattr(newton, "open_close", counted)
+        profile = StepProfile()
+        with profile.active():
+            sol = newton.NewtonRaphson().solve_step(replace(problem))
+        out.append((sol, calls, profile.solves))
+    (a, calls, solves_a), (b, fused_calls, solves_b) = out
+    assert a.converged and b.converged and fused_calls == []
+    retry = calls[1]
+    if patience < 10:  # its open and closed states stand from the first pass on
+        assert retry == (True, patience + 1, False)
+    else:
+        assert retry[0] and retry[2] and retry[1] > 3
+    assert (a.open_close_passes, a.iterations) == (b.open_close_passes, b.iterations)
+    assert solves_a == solves_b
+    assert a.residual_norms == b.residual_norms
+    np.testing.assert_array_equal(a.d, b.d)

@@ -259,21 +259,22 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
 
 
 @njit(cache=True)
-def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patience, unsettled,
-                      max_iter, predictor_iterations, tol, round_off, halvings_allowed,
-                      cycle_length, block_k, block_f, d_known, n, block_base, block_step,
-                      free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows,
-                      terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot,
-                      dashpot, reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se0,
-                      slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2, a3, xi0, shear0,
-                      noise_floor):
+def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patience,
+                      retry_patience, unsettled, max_iter, predictor_iterations, tol, round_off,
+                      halvings_allowed, cycle_length, block_k, block_f, d_known, n, block_base,
+                      block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
+                      reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length,
+                      has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,
+                      state0, g_se0, slip0, sliding0, t_n0, gap_tol, rigid, p1, p2, p3, a1, a2,
+                      a3, xi0, shear0, noise_floor):
     """The fully implicit method's whole step on a dense system
     (:meth:`dda.solvers.NewtonRaphson.solve_step`) in one call: the pull-back and first
     states, the predictor (OPEN-CLOSE with the open and closed states settled,
     :func:`dda.kernels.dense_passes.dense_passes`), Newton's iterations from it
     (:func:`dense_newton`, at most ``predictor_iterations`` when the predictor left stick and
     slip unsettled) and, when those do not converge, the predictor with stick and slip settled
-    too and Newton again. With ``unsettled``, an OPEN-CLOSE that does not settle in its
+    too (or, after ``retry_patience`` passes that open or close no contact, not) and Newton
+    again with all its ``max_iter``. With ``unsettled``, an OPEN-CLOSE that does not settle in its
     passes is a predictor all the same (its last pass's increments, Newton's whole
     ``max_iter``; ``NewtonRaphson(unsettled_predictor=True)``).
 
@@ -304,8 +305,11 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
     spring, t_s = np.zeros(m), np.zeros(m)
     g_se, slip, sliding = g_se0.copy(), slip0.copy(), sliding0.copy()
     for settle_friction in (False, True):
+        # (a conditional among the call's arguments is more than numba compiles)
+        calm_limit = retry_patience if settle_friction else patience
         oc_status, oc_passes, d, _, _, _, friction_settled = dense_passes(
-            max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after, patience,
+            max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after,
+            calm_limit,
             block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step,
             side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn,
             ps, kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion,
@@ -316,7 +320,8 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
             break
         # from the looser predictor Newton gets a few iterations only; from one that did not
         # settle, all (settling stick and slip would not settle either)
-        limit = max_iter if friction_settled else min(max_iter, predictor_iterations)
+        limit = (max_iter if friction_settled or settle_friction
+                 else min(max_iter, predictor_iterations))
         if oc_status == NOT_SETTLED:
             limit = max_iter
         (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,

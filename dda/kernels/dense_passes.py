@@ -254,7 +254,9 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
     The arguments are :func:`dense_passes`' but for the step's start: ``state0``, the
     committed history ``g_se0, slip0, sliding0`` and normal forces ``t_n0`` instead of the
     pulled-back history, the stick forces and the first pass's states; ``pn`` is the normal
-    penalty (the spring forces' stiffness), ``kn`` the judged normal force's.
+    penalty (the spring forces' stiffness), ``kn`` the judged normal force's. ``patience`` is
+    not used: legacy DDA settles its friction in every step
+    (:func:`dda.solvers.open_close.predictor_patience`).
 
     Returns
     -------
@@ -269,7 +271,7 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
                                                     g_se0, slip0, sliding0, t_n0, ps, length)
     state, held = first_states(state0, over, gap0, gap_tol, True)
     status, passes, d, state, gap, dgs, _ = dense_passes(
-        max_passes, True, band, rtol, floor, cycle_tension, relax_after, patience, block_k,
+        max_passes, True, band, rtol, floor, cycle_tension, relax_after, 0, block_k,
         block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
         side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,
         length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,

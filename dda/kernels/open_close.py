@@ -343,9 +343,9 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
     iteration has settled, whether the stick and slip states settled too, the lagged normal
     force of the next pass with this pass's lag error, and which contacts' lagged force
     counts as settled. ``flips``, ``pinned`` and ``calm`` (a 1-element count of the passes in
-    a row that changed no contact between open and closed) change in place; without
-    ``settle_friction`` the iteration has settled once ``calm`` reaches ``patience``, whatever
-    the friction and lagged forces (:data:`dda.solvers.open_close.LAG_PATIENCE`).
+    a row that changed no contact between open and closed) change in place; the iteration has
+    settled, its friction not, once ``calm`` reaches ``patience`` (0: never), whatever the
+    friction and lagged forces (:func:`dda.solvers.open_close.predictor_patience`).
     """
     m = state.shape[0]
     new_state = np.empty(m, dtype=np.int8)
@@ -407,7 +407,7 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
                                   settle_friction, local)
         lag_settled = _lag_all(lag_ok, state)
     done = settled and lag_settled
-    if not (done or settle_friction) and calm[0] >= patience:
+    if not done and patience > 0 and calm[0] >= patience:
         done = True
         friction_settled = False
     next_lag = t_n.copy()

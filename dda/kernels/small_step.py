@@ -68,7 +68,9 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     ``law`` is ``(kind, mu_static, mu_dynamic, cohesion)`` of the scene's one law, ``init``
     its initial ``(g_se, slip, sliding)``, ``faces`` whether it judges faces (grouped with
     :func:`dda.kernels.faces.face_index` and ``face_cos``); ``rules`` the passes' ``(rtol, floor,
-    cycle_tension, relax_after, patience)``; the rest are the arguments of the kernels named
+    cycle_tension, relax_after, patience, retry_patience)`` (the fully implicit method's
+    patience of its predictor and of its retry, :func:`dda.solvers.open_close.
+    predictor_patience`); the rest are the arguments of the kernels named
     in the module docstring, under their names there.
 
     Returns
@@ -187,18 +189,18 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     else:
         face = np.full(m, -1, dtype=np.int64)
     # ---- the solver's step (dda.solvers.legacy._dense_step, dda.solvers.newton._dense_step)
-    rtol, floor, cycle_tension, relax_after, patience = rules
+    rtol, floor, cycle_tension, relax_after, patience, retry_patience = rules
     norms = e0
     if newton:
         (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping, t_n, t_s,
          g_se_out, slip_out, sliding_out, solves) = newton_dense_step(
-            max_passes, rtol, floor, cycle_tension, relax_after, patience, unsettled, max_iter,
-            predictor_iterations, tol, round_off, halvings, cycle_length, block_k, block_f,
-            d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
-            side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap, pn,
-            ps_step, judge, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d,
-            cohesion, face, state0, g_se, slip, sliding, t_n0, gap_tol, rigid, p1, p2, p3,
-            maps[0], maps[1], maps[2], xi0, shear0, noise_floor)
+            max_passes, rtol, floor, cycle_tension, relax_after, patience, retry_patience,
+            unsettled, max_iter, predictor_iterations, tol, round_off, halvings, cycle_length,
+            block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
+            pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row,
+            i_row, gap, pn, ps_step, judge, length, has_dashpot, dashpot, reference, release,
+            kind, mu_s, mu_d, cohesion, face, state0, g_se, slip, sliding, t_n0, gap_tol, rigid,
+            p1, p2, p3, maps[0], maps[1], maps[2], xi0, shear0, noise_floor)
         ints[0], ints[1], ints[2], ints[3], ints[4], ints[5] = (status, oc_status, oc_passes,
                                                                 passes, it, solves)
         floats[2] = scale
@@ -212,7 +214,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     else:
         (status, passes, d, state, t_n, t_s, g_se_out, slip_out,
          sliding_out) = legacy_dense_step(max_passes, band, rtol, floor, cycle_tension,
-                                          relax_after, patience, block_k, block_f, d_known, n,
+                                          relax_after, 0, block_k, block_f, d_known, n,
                                           block_base, block_step, free_blocks, pair_base,
                                           pair_step, side_row, side_block, keep, reduced, rows,
                                           terms, bj, bk, free, e_row, i_row, gap, pn, ps_step,

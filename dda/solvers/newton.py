@@ -57,6 +57,7 @@ from dda.solvers.open_close import (
     dense_layout,
     open_close,
     pass_rules,
+    predictor_patience,
     round_off_gap,
 )
 
@@ -86,11 +87,13 @@ NEAR_SWITCHES = 4
 # longer cycles took the cut steps from 67 / 65 / 58 to 30 / 32 / 40
 CYCLE_LENGTH = 8
 # whether the predictor's passes may solve by a low-rank update of the last factorization
-# (dda.solvers.sparse_factor.LOW_RANK_TERMS): off, for on the 60 x 60 stack of
-# benchmarks/stacks.py it took the median step from 391-433 to 350-415 ms (seven runs, gravity
-# changed by 0 to 6e-12) but 4 of the 7 runs cut a step (without it: none), each a
+# (dda.solvers.sparse_factor.LOW_RANK_TERMS). Off: on the 60 x 60 stack of benchmarks/stacks.py
+# it first took 4 of 7 runs (gravity changed by 0 to 6e-12) to a cut step, none without it (a
 # friction-settled predictor in which one contact switched between stick and slip in every
-# pass until the limit
+# pass until the limit); with the retry's patience (open_close.RETRY_PATIENCE) none of the
+# seven cut, but the time it saved (7.76 -> 7.23 factorizations a step, median step 420 -> 402
+# ms on average) stayed within the runs' spread (benchmarks/README.md, issue 19's eighteenth
+# part)
 PREDICTOR_LOW_RANK = False
 
 
@@ -172,7 +175,7 @@ class NewtonRaphson(NonlinearSolver):
                 return StepSolution(oc.d, problem.element.contacts, True, passes, 0)
             # from the looser predictor Newton gets a few iterations only: when it has not
             # converged by then, settling stick and slip first is the cheaper way on
-            limit = (None if oc.friction_settled
+            limit = (None if oc.friction_settled or settle_friction
                      else min(self.max_iter, PREDICTOR_ITERATIONS))
             sol = self.iterate(problem, oc.d, limit)
             sol.open_close_passes = passes
@@ -300,8 +303,8 @@ class NewtonRaphson(NonlinearSolver):
         with section("solve"):
             (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping,
              spring, t_s, g_se, slip, sliding, solves) = newton_dense_step(
-                problem.max_open_close, *pass_rules(), self.unsettled_predictor, self.max_iter,
-                PREDICTOR_ITERATIONS,
+                problem.max_open_close, *pass_rules(), predictor_patience(False, True),
+                self.unsettled_predictor, self.max_iter, PREDICTOR_ITERATIONS,
                 float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS, CYCLE_LENGTH,
                 *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
                 *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el),

@@ -31,7 +31,10 @@ settle, and Newton gets the predictor's few iterations before the full rule is t
 computes every contact's friction from its exact normal force anyway. On the 1,000-brick wall
 of ``benchmarks/scaling.py`` one step's predictor had settled its open and closed states by
 pass 4 and then switched one contact between stick and slip, and found 10 to 17 lagged forces
-off, in every pass until the limit of 30 cut the step.
+off, in every pass until the limit of 30 cut the step. The predictor run again to the full rule
+(Newton did not converge from the looser one) has settled the same way after
+``RETRY_PATIENCE`` such passes, and Newton then gets its whole budget of iterations: on the
+60 x 60 stack one contact switched between stick and slip in every pass of it until the limit.
 
 Three rules keep the iteration honest (each was needed; tests/test_dynamics.py shows why):
 - a sliding contact whose trial shear force turns against the friction load of the pass
@@ -126,8 +129,8 @@ from dda.solvers.base import StepProblem
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve
 
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
-           "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "LAG_PATIENCE", "SETTLE_BAND",
-           "round_off_gap"]
+           "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "LAG_PATIENCE", "RETRY_PATIENCE",
+           "SETTLE_BAND", "predictor_patience", "round_off_gap"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
@@ -143,6 +146,9 @@ LAG_RELAX_AFTER = 6
 # the fully implicit method's predictor: settled once this many passes in a row have changed no
 # contact between open and closed, whatever its friction (module docstring)
 LAG_PATIENCE = 5
+# ... and once the predictor settles stick and slip too (Newton did not converge from the
+# looser one), after this many (module docstring); legacy DDA has no such rule
+RETRY_PATIENCE = 10
 # legacy DDA: a pass whose state changes each move less force than this fraction of the largest
 # normal force on the lighter loaded of the contact's blocks counts as settled (module docstring)
 SETTLE_BAND = 1e-2
@@ -190,6 +196,7 @@ def open_close(problem: StepProblem, explicit: bool,
         settle_friction = explicit
     if band is None:
         band = SETTLE_BAND if explicit else 0.0
+    patience = predictor_patience(explicit, settle_friction)
     el = problem.element
     if len(el) == 0:  # no contacts: one linear solve settles the step
         return _without_contacts(problem)
@@ -198,7 +205,7 @@ def open_close(problem: StepProblem, explicit: bool,
     history, t_stick, state, held = _start(el, explicit, gap_tol, compiled)
     if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
-                                settle_friction, band)
+                                settle_friction, band, patience)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -241,7 +248,7 @@ def open_close(problem: StepProblem, explicit: bool,
         if settled and np.all(lag_ok | (state != SLIP)):
             return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history,
                                    bool(np.array_equal(new_state, state)))
-        if not settle_friction and calm >= LAG_PATIENCE:
+        if patience and calm >= patience:
             return OpenCloseResult(True, passes, "", d, new_state, gap, dgs, history, False)
         if new_state.tobytes() in seen and not np.array_equal(new_state, state):
             held = _unhold_cycling(held, state, new_state)
@@ -267,7 +274,7 @@ def _solve_pass(problem, k, f):
 
 
 def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle_friction,
-                     band) -> OpenCloseResult:
+                     band, patience) -> OpenCloseResult:
     """The iteration of :func:`open_close` with the built-in laws' compiled passes
     (:mod:`dda.kernels.open_close`): the same rules in the same order, the same results."""
     m = len(el)
@@ -276,7 +283,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     g_se, _, sliding = kernel_history(history, m)
     if dense_eligible(problem):
         return _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
-                      (g_se, sliding, as_float64(t_stick)))
+                      patience, (g_se, sliding, as_float64(t_stick)))
     pn, kn, ps, length, gap0, e_row, i_row, t_stick = (
         np.ascontiguousarray(a, dtype=f64) for a in (
             el.normal_penalty, el.judge_stiffness, el.shear_penalty, el.length, el.gap0,
@@ -284,7 +291,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     bj, bk = (np.asarray(b, dtype=np.int64) for b in (el.bj, el.bk))
     free = np.asarray(problem.free, dtype=np.bool_)
     state = np.asarray(state, dtype=np.int8)
-    rules = pass_rules()
+    rules = pass_rules(patience)
     t_n_lag = np.array(el.contacts.t_n, dtype=f64)
     dgs_prev = np.zeros(m)
     seen = {state.tobytes()}
@@ -366,12 +373,22 @@ def dense_layout(pattern) -> tuple:
     return layout
 
 
-def pass_rules() -> tuple:
+def pass_rules(patience: int | None = None) -> tuple:
     """The passes' rules as the kernels take them: ``NORMAL_FORCE_RTOL``,
-    ``NORMAL_FORCE_FLOOR``, ``CYCLE_TENSION``, ``LAG_RELAX_AFTER``, ``LAG_PATIENCE`` (read at
-    each call)."""
+    ``NORMAL_FORCE_FLOOR``, ``CYCLE_TENSION``, ``LAG_RELAX_AFTER`` and the patience
+    (``LAG_PATIENCE`` unless given; read at each call)."""
     return (NORMAL_FORCE_RTOL, NORMAL_FORCE_FLOOR, CYCLE_TENSION, LAG_RELAX_AFTER,
-            LAG_PATIENCE)
+            LAG_PATIENCE if patience is None else int(patience))
+
+
+def predictor_patience(explicit: bool, settle_friction: bool) -> int:
+    """The passes in a row that open or close no contact after which the iteration counts as
+    settled with its friction unsettled (the kernels' ``patience``; 0: never): legacy DDA
+    never, the fully implicit method's predictor after ``LAG_PATIENCE``, and after
+    ``RETRY_PATIENCE`` when it settles stick and slip too (module docstring)."""
+    if explicit:
+        return 0
+    return RETRY_PATIENCE if settle_friction else LAG_PATIENCE
 
 
 def dense_failure(status: int, passes: int) -> str:
@@ -382,7 +399,7 @@ def dense_failure(status: int, passes: int) -> str:
                                   else "the step's system has no finite solution")
 
 
-def _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
+def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, patience,
            start) -> OpenCloseResult:
     """:func:`_compiled_passes` on a dense system: every pass in one kernel call
     (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
@@ -390,7 +407,7 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
     Its time is the step profile's ``solve``."""
     with section("solve"):
         status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
-            problem.max_open_close, bool(settle_friction), float(band), *pass_rules(),
+            problem.max_open_close, bool(settle_friction), float(band), *pass_rules(patience),
             *dense_arguments(problem), *start, np.asarray(state, dtype=np.int8),
             np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
     count_solve(passes)
