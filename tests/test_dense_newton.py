@@ -157,6 +157,29 @@ def _stack_step_problem(index):
     return problems[index]
 
 
+def _both_paths(problem, monkeypatch, **solver):
+    """``NewtonRaphson(**solver).solve_step(problem)`` composed and in one kernel call:
+    ``[(solution, calls, solves), ...]``, with ``calls`` the composed path's OPEN-CLOSE
+    calls as ``(settle_friction, passes, friction_settled)``."""
+    out = []
+    for fused in (False, True):
+        monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", fused)
+        calls = []
+        original = open_close.open_close
+
+        def counted(*args, original=original, calls=calls, **kw):
+            result = original(*args, **kw)
+            calls.append((kw.get("settle_friction"), result.passes, result.friction_settled))
+            return result
+
+        monkeypatch.setattr(newton, "open_close", counted)
+        profile = StepProfile()
+        with profile.active():
+            sol = newton.NewtonRaphson(**solver).solve_step(replace(problem))
+        out.append((sol, calls, profile.solves))
+    return out
+
+
 @pytest.mark.parametrize("max_iter, tol", [(25, 1e-9), (1, 1e-30)])
 def test_a_newton_step_in_one_call_settles_friction_when_it_must(max_iter, tol, monkeypatch):
     """A step whose predictor leaves stick and slip unsettled (the 3 x 3 stack's fourth)
@@ -165,23 +188,9 @@ def test_a_newton_step_in_one_call_settles_friction_when_it_must(max_iter, tol, 
     with one iteration allowed towards a tolerance below round-off both fail alike."""
     problem = _stack_step_problem(3)
     monkeypatch.setattr(newton, "PREDICTOR_ITERATIONS", 0)
-    out = []
-    for fused in (False, True):
-        monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", fused)
-        calls = []
-        original = open_close.open_close
-
-        def counted(*args, original=original, calls=calls, **kw):
-            calls.append(kw.get("settle_friction"))
-            return original(*args, **kw)
-
-        monkeypatch.setattr(newton, "open_close", counted)
-        profile = StepProfile()
-        with profile.active():
-            sol = newton.NewtonRaphson(tol, max_iter).solve_step(replace(problem))
-        out.append((sol, calls, profile.solves))
+    out = _both_paths(problem, monkeypatch, tol=tol, max_iter=max_iter)
     (a, calls, solves_a), (b, fused_calls, solves_b) = out
-    assert calls == [False, True] and fused_calls == []  # the composed path settled friction
+    assert [c[0] for c in calls] == [False, True] and fused_calls == []  # friction settled
     assert a.converged == b.converged == (tol == 1e-9)
     assert (a.open_close_passes, a.iterations, a.reason) == (
         b.open_close_passes, b.iterations, b.reason)
@@ -204,22 +213,7 @@ def test_the_retry_hands_over_after_its_patience_alike(patience, monkeypatch):
     monkeypatch.setattr(open_close, "RETRY_PATIENCE", patience)
     assert open_close.predictor_patience(True, True) == 0
     assert open_close.predictor_patience(False, True) == patience
-    out = []
-    for fused in (False, True):
-        monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", fused)
-        calls = []
-        original = open_close.open_close
-
-        def counted(*args, original=original, calls=calls, **kw):
-            result = original(*args, **kw)
-            calls.append((kw.get("settle_friction"), result.passes, result.friction_settled))
-            return result
-
-        monkeypatch.setattr(newton, "open_close", counted)
-        profile = StepProfile()
-        with profile.active():
-            sol = newton.NewtonRaphson().solve_step(replace(problem))
-        out.append((sol, calls, profile.solves))
+    out = _both_paths(problem, monkeypatch)
     (a, calls, solves_a), (b, fused_calls, solves_b) = out
     assert a.converged and b.converged and fused_calls == []
     retry = calls[1]
