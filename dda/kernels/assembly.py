@@ -61,6 +61,14 @@ def contact_matrix(out, rows, terms, weights, c):
 
 
 @njit(cache=True)
+def _lands_nowhere(places, c):
+    """Whether none of contact c's four couplings has a place in the matrix (``places``
+    (4, m), -1: nowhere): both its blocks known, or, in the upper triangle, none on or
+    above the diagonal."""
+    return places[0, c] < 0 and places[1, c] < 0 and places[2, c] < 0 and places[3, c] < 0
+
+
+@njit(cache=True)
 def coupling_block(out, rows, terms, weights, c, a6, b6):
     """The 6 x 6 block of contact c's matrix at rows a6.., columns b6.. into ``out``:
 
@@ -106,8 +114,7 @@ def matrix_data(nnz, row_step, block_base, block_step, block_k, free_blocks, pai
                 data[base + i * row_step + j * step] += block_k[free_blocks[s], i, j]
     kc = np.empty((12, 12))
     for c in range(pair_base.shape[1]):
-        if (pair_base[0, c] < 0 and pair_base[1, c] < 0 and pair_base[2, c] < 0
-                and pair_base[3, c] < 0):
+        if _lands_nowhere(pair_base, c):
             continue
         contact_matrix(kc, rows, terms, weights, c)
         for ab in range(4):
@@ -175,8 +182,7 @@ def upper_data(nnz, block_start, block_count, block_k, free_blocks, pair_start, 
 def _upper_contact(data, kc, pair_start, pair_count, pair_rank, rows, terms, weights, c):
     """Add contact c's couplings with ``weights`` to the upper-triangle CSR ``data``, those
     that lie on or right of the diagonal (``kc``: a 12 x 12 work array)."""
-    if (pair_start[0, c] < 0 and pair_start[1, c] < 0 and pair_start[2, c] < 0
-            and pair_start[3, c] < 0):
+    if _lands_nowhere(pair_start, c):
         return
     contact_matrix(kc, rows, terms, weights, c)
     for ab in range(4):
