@@ -267,6 +267,58 @@ def test_mixed_precision_solves_to_double_precision_accuracy(symmetric):
 
 
 @pardiso
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_a_refined_solve_stops_at_the_callers_residual(symmetric):
+    """``atol``: the refinement of single-precision factors returns the first iterate whose
+    double-precision residual is within it (an inexact Newton step needs no more), and goes
+    on to MIXED_RTOL without it. Measured here: the unrefined solve leaves a residual of
+    about 3e-6 of the right-hand side, one refinement 1e-12 of it."""
+    k, rhs = block_system(400, 3, unsymmetric=0.0 if symmetric else 0.3)
+    full = sf.PardisoFactor(symmetric, precision="auto")
+    exact = full.solve(k, rhs)
+    assert full.refinements == 1 and full.inexact_solves == 0
+    first = np.linalg.norm(rhs - k @ full._apply(rhs))
+    assert first > 1e-8 * np.linalg.norm(rhs)  # the single-precision solve alone is not exact
+
+    loose = sf.PardisoFactor(symmetric, precision="auto")
+    x = loose.solve(k, rhs, atol=2.0 * first)  # the unrefined solve is within it
+    assert (loose.refinements, loose.inexact_solves, loose.factorizations) == (0, 1, 1)
+    assert np.linalg.norm(rhs - k @ x) <= 2.0 * first
+    np.testing.assert_array_equal(x, loose._apply(rhs))
+    # an atol below the first residual: refined once, to MIXED_RTOL as without it, to the
+    # same answer
+    x = loose.solve(k, rhs, atol=0.5 * first)
+    assert (loose.refinements, loose.inexact_solves, loose.factorizations) == (1, 1, 1)
+    # (two PARDISO handles' factors of one matrix may differ in their last bits)
+    same = {"rtol": 0.0, "atol": 1e-13 * np.abs(exact).max()}
+    np.testing.assert_allclose(x, exact, **same)
+    # none or 0: refined in full
+    for atol in (None, 0.0):
+        np.testing.assert_allclose(loose.solve(k, rhs, atol=atol), exact, **same)
+    assert (loose.refinements, loose.inexact_solves) == (3, 1)
+
+
+@pardiso
+def test_solve_near_stops_at_the_callers_residual():
+    """GMRES with the last factorization stops at ``atol`` when that is above NEAR_RTOL of
+    the right-hand side, and the answer leaves at most that residual."""
+    k, rhs = block_system(400, 1, unsymmetric=0.4)
+    near = k.copy()
+    near.data *= 1.0 + 1e-3 * np.random.default_rng(2).normal(size=near.nnz)
+    tight, loose = (sf.PardisoFactor(False, precision="auto") for _ in range(2))
+    for f in (tight, loose):
+        f.solve(k, rhs)
+    atol = 1e-6 * np.linalg.norm(rhs)
+    x_tight = tight.solve_near(near, rhs)
+    x_loose = loose.solve_near(near, rhs, atol=atol)
+    assert tight.near_solves == loose.near_solves == 1
+    assert loose.factorizations == tight.factorizations == 1
+    r_tight = np.linalg.norm(rhs - near @ x_tight)
+    r_loose = np.linalg.norm(rhs - near @ x_loose)
+    assert r_tight <= sf.NEAR_RTOL * np.linalg.norm(rhs) < r_loose <= atol
+
+
+@pardiso
 def test_small_systems_stay_in_double_precision():
     k, rhs = block_system(60, 1)
     assert k.shape[0] < sf.MIXED_MIN_UNKNOWNS

@@ -429,7 +429,8 @@ def _upper_keys(keys, nf):
 
 
 def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, pattern=None,
-                       rigid=None, factor: SparseFactor | None = None, near: bool = False):
+                       rigid=None, factor: SparseFactor | None = None, near: bool = False,
+                       atol: float | None = None):
     """Assemble and solve ``K d = F`` for the free blocks.
 
     Parameters
@@ -456,6 +457,10 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         of the same step): a sparse system is solved by :meth:`SparseFactor.solve_near`
         (GMRES preconditioned by that factorization, a new one only when it does not
         converge at once).
+    atol : float, optional
+        The residual ``|F - K d|`` (2-norm over the free unknowns) the solution may leave:
+        a refined sparse solve stops there (Newton's correction needs no more than its own
+        tolerance; :meth:`SparseFactor.solve`). None: as accurate as the solver gets.
 
     Returns
     -------
@@ -475,15 +480,17 @@ def assemble_and_solve(block_k, block_f, free, bj, bk, pair_k, pair_f, d_known, 
         rhs = pattern.reduce(pattern.rhs(block_f, pair_k, pair_f, d_known))
     with section("solve"):
         count_solve()
-        sol = _solve(k, rhs, factor, near)
+        sol = _solve(k, rhs, factor, near, atol)
     d[pattern.free_blocks] = pattern.expand(sol).reshape(-1, 6)
     return d
 
 
-def _solve(k, rhs, factor: SparseFactor | None, near: bool = False):
+def _solve(k, rhs, factor: SparseFactor | None, near: bool = False,
+           atol: float | None = None):
     """Dense LAPACK for an ndarray; a sparse matrix goes to ``factor`` (a one-off holder of
     the default backend when None, :mod:`dda.solvers.sparse_factor`), by
-    :meth:`SparseFactor.solve_near` when ``near``."""
+    :meth:`SparseFactor.solve_near` when ``near``, with the residual ``atol`` it may stop at
+    (:meth:`SparseFactor.solve`)."""
     if isinstance(k, np.ndarray):
         try:
             sol = np.linalg.solve(k, rhs)
@@ -491,7 +498,7 @@ def _solve(k, rhs, factor: SparseFactor | None, near: bool = False):
             raise SingularSystemError(str(exc)) from None
     else:
         factor = factor or make_factor()
-        sol = factor.solve_near(k, rhs) if near else factor.solve(k, rhs)
+        sol = factor.solve_near(k, rhs, atol) if near else factor.solve(k, rhs, atol)
     if not np.all(np.isfinite(sol)):
         raise SingularSystemError("the step's system has no finite solution")
     return sol

@@ -95,6 +95,11 @@ CYCLE_LENGTH = 8
 # ms on average) stayed within the runs' spread (benchmarks/README.md, issue 19's eighteenth
 # part)
 PREDICTOR_LOW_RANK = False
+# a Newton correction's linear solve may leave a residual of this fraction of the convergence
+# threshold (tol times the forces' scale; an inexact Newton step): the single-precision
+# factors' refinement stops there (dda.solvers.sparse_factor) instead of at 1e-12 of the
+# solution. 0 (or None): every solve refined in full
+INEXACT_FRACTION = 0.1
 
 
 class NewtonRaphson(NonlinearSolver):
@@ -254,7 +259,9 @@ class NewtonRaphson(NonlinearSolver):
                 step = assemble_and_solve(problem.block_k, -block_r, free,
                                           *problem.pair_blocks, tangent, -pair_r,
                                           np.zeros_like(problem.d_known),
-                                          problem.pattern, factor=factor, near=near)
+                                          problem.pattern, factor=factor, near=near,
+                                          atol=(INEXACT_FRACTION * self.tol * scale
+                                                if INEXACT_FRACTION else None))
             except SingularSystemError as exc:
                 return StepSolution(None, None, False, 0, it, f"singular tangent: {exc}", norms)
             if factor is not None and factor.factorizations != done:

@@ -192,15 +192,19 @@ class SparseFactor:
         self.analyses = 0  # symbolic analyses done
         self.near_solves = 0  # solves by GMRES with an earlier factorization (solve_near)
 
-    def solve(self, k: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
+    def solve(self, k: sp.csc_matrix, rhs: np.ndarray, atol: float | None = None) -> np.ndarray:
+        """Solve ``k x = rhs``. ``atol``: the caller needs the residual ``|rhs - k x|``
+        (2-norm) no smaller than this; a backend that refines its solution (PARDISO's mixed
+        precision) may stop there (an inexact Newton step). None: as accurate as it can."""
         raise NotImplementedError
 
-    def solve_near(self, k, rhs: np.ndarray) -> np.ndarray:
+    def solve_near(self, k, rhs: np.ndarray, atol: float | None = None) -> np.ndarray:
         """Solve ``k x = rhs`` for a ``k`` close to the matrix factorized last (a later Newton
         iteration's tangent): GMRES preconditioned by that factorization, which converges in
         a few iterations where the two matrices differ by little; :meth:`solve` (a new
         factorization) when there is none of the same pattern, or GMRES has not brought the
-        residual to ``NEAR_RTOL`` of the right-hand side in ``NEAR_ITERATIONS``.
+        residual to ``NEAR_RTOL`` of the right-hand side (or to ``atol``, when that is
+        larger; :meth:`solve`) in ``NEAR_ITERATIONS``.
 
         On the 30 x 30 stack of ``benchmarks/stacks.py`` a Newton iteration's tangent after
         the step's first took 2 to 4 iterations to 1e-10 with the first one's ``L U``; a new
@@ -211,13 +215,13 @@ class SparseFactor:
             n = k.shape[0]
             b = np.asarray(rhs, dtype=float)
             m = spla.LinearOperator((n, n), matvec=apply, dtype=float)
-            x, _ = spla.gmres(k, b, M=m, rtol=NEAR_RTOL, atol=0.0, restart=NEAR_ITERATIONS,
+            target = max(NEAR_RTOL * float(np.linalg.norm(b)), atol or 0.0)
+            x, _ = spla.gmres(k, b, M=m, rtol=0.0, atol=target, restart=NEAR_ITERATIONS,
                               maxiter=1)
-            bnorm = float(np.linalg.norm(b))
-            if np.all(np.isfinite(x)) and np.linalg.norm(k @ x - b) <= NEAR_RTOL * bnorm:
+            if np.all(np.isfinite(x)) and np.linalg.norm(k @ x - b) <= target:
                 self.near_solves += 1
                 return x
-        return self.solve(k, rhs)
+        return self.solve(k, rhs, atol)
 
     def _last_inverse(self, k):
         """The solve with the last factorization (a function of a vector) when it was of a
@@ -238,7 +242,7 @@ class SuperLUFactor(SparseFactor):
         super().__init__(symmetric)
         self._last = None  # (indptr, indices, data, lu) of the matrix factorized last
 
-    def solve(self, k, rhs):
+    def solve(self, k, rhs, atol=None):
         last = self._last
         if last is not None and all(np.array_equal(x, y) for x, y in zip(
                 last[:3], (k.indptr, k.indices, k.data), strict=True)):
@@ -341,6 +345,7 @@ class PardisoFactor(SparseFactor):
         self.single_failures = 0  # single-precision factors sent back to double precision
         self._in_double = False  # solving a failed single-precision matrix again in double
         self.refinements = 0  # refinements of single-precision solutions done
+        self.inexact_solves = 0  # solves stopped at the caller's residual (``atol``)
         self.low_rank_solves = 0  # solves by a low-rank update of the last factors
 
     def wants_single(self, n: int) -> bool:
@@ -349,7 +354,7 @@ class PardisoFactor(SparseFactor):
             return False
         return self.precision == "mixed" or n >= MIXED_MIN_UNKNOWNS
 
-    def solve(self, k, rhs):
+    def solve(self, k, rhs, atol=None):
         from pypardiso.pardiso_wrapper import PyPardisoError  # noqa: PLC0415
 
         a = k.csr if isinstance(k, UpperTriangle) else self._pardiso_matrix(k)
@@ -367,7 +372,7 @@ class PardisoFactor(SparseFactor):
                     and k.change[0] is self._values):
                 if not np.all(np.isfinite(b)):
                     return np.full(len(b), np.nan)
-                sol = self._low_rank_solve(k, b.reshape(-1), *k.change[1:])
+                sol = self._low_rank_solve(k, b.reshape(-1), *k.change[1:], atol=atol)
                 if sol is not None:
                     return sol
             if not (same and self._values is not None and _same_array(self._values, a.data)):
@@ -385,7 +390,7 @@ class PardisoFactor(SparseFactor):
             if single:
                 if not np.all(np.isfinite(b)):  # no answer, whatever the factors
                     return np.full(len(b), np.nan)
-                sol = self._refined(k, b.reshape(-1))
+                sol = self._refined(k, b.reshape(-1), atol=atol)
                 if sol is None:
                     return self._in_double_precision(k, rhs)
                 return sol
@@ -416,17 +421,24 @@ class PardisoFactor(SparseFactor):
             self.single_failures += 1
         return sol
 
-    def _refined(self, k, b: np.ndarray, apply=None) -> np.ndarray | None:
+    def _refined(self, k, b: np.ndarray, apply=None,
+                 atol: float | None = None) -> np.ndarray | None:
         """The solution of ``k x = b`` from the single-precision factors (or the approximate
         inverse ``apply``), refined in double precision (module docstring); None when the
-        refinement does not converge."""
+        refinement does not converge. With ``atol``, an iterate whose residual
+        ``|b - k x|`` (in double precision) is at most ``atol`` is returned as it is."""
         apply = apply or self._apply
         x = apply(b)
         last = float(np.linalg.norm(x))
         if not np.isfinite(last):
             return None
         for i in range(MIXED_REFINEMENTS):
-            dx = apply(b - k @ x)
+            r = b - k @ x
+            if atol is not None and float(np.linalg.norm(r)) <= atol:
+                self.refinements += i
+                self.inexact_solves += 1
+                return x
+            dx = apply(r)
             x = x + dx
             step = float(np.linalg.norm(dx))
             if not np.isfinite(step):
@@ -441,7 +453,7 @@ class PardisoFactor(SparseFactor):
         return None
 
     def _low_rank_solve(self, k: UpperTriangle, b: np.ndarray, rows: np.ndarray,
-                        u: np.ndarray, lam: np.ndarray):
+                        u: np.ndarray, lam: np.ndarray, atol: float | None = None):
         r"""Solve the symmetric ``k x = b`` with the factors of the matrix ``A`` factorized
         last, where ``k = A + U \Lambda U^T`` (``U`` zero but in the rows ``rows``, where it
         is ``u``; ``\Lambda = diag(lam)``, the changed springs): the Sherman-Morrison-
@@ -458,7 +470,7 @@ class PardisoFactor(SparseFactor):
         factorization 32 ms. None (then ``k`` is factorized) when the update is singular or
         the refinement does not converge."""
         if len(lam) == 0:
-            return self._refined(k, b)
+            return self._refined(k, b, atol=atol)
         full = np.zeros((len(b), len(lam)))
         full[rows] = u
         z = self._apply_many(full)
@@ -473,7 +485,7 @@ class PardisoFactor(SparseFactor):
             y = self._apply(v)
             return y - z @ (inverse @ (u.T @ y[rows]))
 
-        sol = self._refined(k, b, apply)
+        sol = self._refined(k, b, apply, atol)
         if sol is not None:
             self.low_rank_solves += 1
         return sol
