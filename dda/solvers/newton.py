@@ -87,14 +87,14 @@ NEAR_SWITCHES = 4
 # longer cycles took the cut steps from 67 / 65 / 58 to 30 / 32 / 40
 CYCLE_LENGTH = 8
 # whether the predictor's passes may solve by a low-rank update of the last factorization
-# (dda.solvers.sparse_factor.LOW_RANK_TERMS). Off: on the 60 x 60 stack of benchmarks/stacks.py
-# it first took 4 of 7 runs (gravity changed by 0 to 6e-12) to a cut step, none without it (a
+# (dda.solvers.sparse_factor.LOW_RANK_TERMS). On the 60 x 60 stack of benchmarks/stacks.py it
+# first took 4 of 7 runs (gravity changed by 0 to 6e-12) to a cut step, none without it (a
 # friction-settled predictor in which one contact switched between stick and slip in every
-# pass until the limit); with the retry's patience (open_close.RETRY_PATIENCE) none of the
-# seven cut, but the time it saved (7.76 -> 7.23 factorizations a step, median step 420 -> 402
-# ms on average) stayed within the runs' spread (benchmarks/README.md, issue 19's eighteenth
-# part)
-PREDICTOR_LOW_RANK = False
+# pass until the limit); with the retry's patience (open_close.RETRY_PATIENCE) none cut. Over
+# 13 such runs of 30 steps, each with and without it (benchmarks/README.md, issue 19's
+# eighteenth and nineteenth parts), the median step took 18 ms (4%) less on average, shorter
+# in 10 of the 13, with 0.4-0.7 factorizations a step fewer and no cut
+PREDICTOR_LOW_RANK = True
 # a Newton correction's linear solve may leave a residual of this fraction of the convergence
 # threshold (tol times the forces' scale; an inexact Newton step): the single-precision
 # factors' refinement stops there (dda.solvers.sparse_factor) instead of at 1e-12 of the
