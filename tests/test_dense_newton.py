@@ -39,9 +39,9 @@ def _problem_and_start(monkeypatch, scene=None, step=3):
     captured = []
     original = newton.NewtonRaphson.iterate
 
-    def capture(self, problem, d, max_iter=None):
+    def capture(self, problem, d, max_iter=None, contraction=0.0):
         captured.append((problem, d.copy()))
-        return original(self, problem, d, max_iter)
+        return original(self, problem, d, max_iter, contraction)
 
     monkeypatch.setattr(newton.NewtonRaphson, "iterate", capture)
     monkeypatch.setattr(newton, "NEWTON_DENSE_STEP", False)  # the iterate is called apart

@@ -26,9 +26,9 @@ def stack_step():
     captured = []
     original = newton.NewtonRaphson.iterate
 
-    def capture(self, problem, d, max_iter=None):
+    def capture(self, problem, d, max_iter=None, contraction=0.0):
         captured.append((problem, d.copy(), max_iter))
-        return original(self, problem, d, max_iter)
+        return original(self, problem, d, max_iter, contraction)
 
     newton.NewtonRaphson.iterate = capture
     try:

@@ -41,9 +41,9 @@ from dda.kernels.open_close import contact_response, step_start
 from dda.kernels.tangent import tangent_rows
 
 __all__ = ["dense_newton", "newton_dense_step", "TANGENT_TERMS", "CONVERGED", "NOT_CONVERGED",
-           "DIVERGED", "SINGULAR", "NOT_FINITE"]
+           "DIVERGED", "SINGULAR", "NOT_FINITE", "STALLED"]
 
-CONVERGED, NOT_CONVERGED, DIVERGED, SINGULAR, NOT_FINITE = 0, 1, 2, 3, 4
+CONVERGED, NOT_CONVERGED, DIVERGED, SINGULAR, NOT_FINITE, STALLED = 0, 1, 2, 3, 4, 5
 
 #: the consistent tangent's terms on the rows E, I, S, H, B: p_n E^T E + I^T S + B^T H + H^T B
 #: (:func:`dda.contact.tangent.consistent_tangent`)
@@ -127,7 +127,8 @@ def _cycle_back(pattern, patterns, count, cycle_length):
 
 
 @njit(cache=True)
-def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, block_k, block_f,
+def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, contraction,
+                 block_k, block_f,
                  free, rigid, n, block_base, block_step, free_blocks, pair_base, pair_step,
                  side_row, side_block, keep, reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0,
                  shear0, release, has_dashpot, kn, pn, ps, length, kind, mu_s, mu_d, cohesion,
@@ -140,6 +141,9 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
     max_iter, tol, round_off, halvings_allowed, cycle_length : the iteration's rules
         (:mod:`dda.solvers.newton`: ``max_iter``, ``tol``, ``ROUND_OFF``,
         ``LINE_SEARCH_HALVINGS``, ``CYCLE_LENGTH``)
+    contraction : when > 0, the iteration gives up (STALLED) at an iterate that has not
+        converged when neither it nor the accepted iterate before brought |R| below this
+        fraction of the one before it (:meth:`dda.solvers.NewtonRaphson.iterate`)
     block_k, block_f, free, rigid : the step's block matrices and forces, the blocks with
         unknowns, the blocks without strain unknowns
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
@@ -159,7 +163,7 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
     Returns
     -------
     status : CONVERGED, NOT_CONVERGED (after ``max_iter``), DIVERGED (non-finite |R|),
-        SINGULAR or NOT_FINITE (the tangent's solve)
+        SINGULAR or NOT_FINITE (the tangent's solve), STALLED (``contraction``)
     it : the iterations counted as the composed iterate counts them
     d : (n_blocks, 6) the last iterate
     norms : |R| of the accepted iterates
@@ -206,6 +210,12 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
                     free, rigid, bj, bk, residual, closed, t_n, t_s, kn, gap_tol))):
             norms[n_norms] = norm
             n_norms += 1
+            break
+        if (contraction > 0.0 and n_norms >= 2 and norm > contraction * norms[n_norms - 1]
+                and norms[n_norms - 1] > contraction * norms[n_norms - 2]):
+            norms[n_norms] = norm
+            n_norms += 1
+            status = STALLED
             break
         pattern = np.empty(m, dtype=np.int8)
         for c in range(m):
@@ -260,7 +270,8 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, bl
 
 @njit(cache=True)
 def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patience,
-                      retry_patience, unsettled, max_iter, predictor_iterations, tol, round_off,
+                      retry_patience, unsettled, max_iter, predictor_iterations,
+                      predictor_contraction, tol, round_off,
                       halvings_allowed, cycle_length, block_k, block_f, d_known, n, block_base,
                       block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
                       reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length,
@@ -271,9 +282,11 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
     (:meth:`dda.solvers.NewtonRaphson.solve_step`) in one call: the pull-back and first
     states, the predictor (OPEN-CLOSE with the open and closed states settled,
     :func:`dda.kernels.dense_passes.dense_passes`), Newton's iterations from it
-    (:func:`dense_newton`, at most ``predictor_iterations`` when the predictor left stick and
-    slip unsettled) and, when those do not converge, the predictor with stick and slip settled
-    too (or, after ``retry_patience`` passes that open or close no contact, not) and Newton
+    (:func:`dense_newton`, at most ``predictor_iterations``, given up once two iterates in a
+    row do not shrink |R| to ``predictor_contraction`` of the last, when the predictor left
+    stick and slip unsettled) and, when those do not converge, the predictor with stick and
+    slip settled too (or, after ``retry_patience`` passes that open or close no contact, not)
+    and Newton
     again with all its ``max_iter``. With ``unsettled``, an OPEN-CLOSE that does not settle in its
     passes is a predictor all the same (its last pass's increments, Newton's whole
     ``max_iter``; ``NewtonRaphson(unsettled_predictor=True)``).
@@ -320,19 +333,19 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
             break
         # from the looser predictor Newton gets a few iterations only; from one that did not
         # settle, all (settling stick and slip would not settle either)
-        limit = (max_iter if friction_settled or settle_friction
-                 else min(max_iter, predictor_iterations))
-        if oc_status == NOT_SETTLED:
-            limit = max_iter
+        looser = not (friction_settled or settle_friction or oc_status == NOT_SETTLED)
+        limit = min(max_iter, predictor_iterations) if looser else max_iter
+        contraction = predictor_contraction if looser else 0.0
         (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
          sliding) = dense_newton(d, limit, tol, round_off, halvings_allowed, cycle_length,
+                                 contraction,
                                  block_k, block_f, free, rigid, n, block_base, block_step,
                                  free_blocks, pair_base, pair_step, side_row, side_block, keep,
                                  reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0, shear0, release,
                                  has_dashpot, kn, pn, ps, length, kind, mu_s, mu_d, cohesion,
                                  face, g_se0, slip0, sliding0, noise_floor, gap_tol)
         # a solve for every accepted iterate but the last, and for the last when it failed
-        solves += norms.shape[0] - 1 + (1 if status >= SINGULAR else 0)
+        solves += norms.shape[0] - 1 + (1 if status == SINGULAR or status == NOT_FINITE else 0)
         if status == CONVERGED or friction_settled or oc_status != CONVERGED:
             break  # settling again would change nothing
     return (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping,

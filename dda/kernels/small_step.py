@@ -61,8 +61,8 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
                  law, init, block_k, block_f, d_known, n, block_base, block_step, free_blocks,
                  pair_base, pair_step, side_row, side_block, keep, reduced, terms, gap_rel,
                  gap_abs, max_passes, band, rules, unsettled, max_iter, predictor_iterations,
-                 tol, round_off, halvings, cycle_length, rigid, faces, face_cos,
-                 noise_floor):
+                 predictor_contraction, tol, round_off, halvings, cycle_length, rigid, faces,
+                 face_cos, noise_floor):
     """One step's contacts, solve, moves and guard (module docstring).
 
     ``law`` is ``(kind, mu_static, mu_dynamic, cohesion)`` of the scene's one law, ``init``
@@ -195,12 +195,13 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping, t_n, t_s,
          g_se_out, slip_out, sliding_out, solves) = newton_dense_step(
             max_passes, rtol, floor, cycle_tension, relax_after, patience, retry_patience,
-            unsettled, max_iter, predictor_iterations, tol, round_off, halvings, cycle_length,
-            block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
-            pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row,
-            i_row, gap, pn, ps_step, judge, length, has_dashpot, dashpot, reference, release,
-            kind, mu_s, mu_d, cohesion, face, state0, g_se, slip, sliding, t_n0, gap_tol, rigid,
-            p1, p2, p3, maps[0], maps[1], maps[2], xi0, shear0, noise_floor)
+            unsettled, max_iter, predictor_iterations, predictor_contraction, tol, round_off,
+            halvings, cycle_length, block_k, block_f, d_known, n, block_base, block_step,
+            free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms,
+            bj, bk, free, e_row, i_row, gap, pn, ps_step, judge, length, has_dashpot, dashpot,
+            reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se, slip, sliding,
+            t_n0, gap_tol, rigid, p1, p2, p3, maps[0], maps[1], maps[2], xi0, shear0,
+            noise_floor)
         ints[0], ints[1], ints[2], ints[3], ints[4], ints[5] = (status, oc_status, oc_passes,
                                                                 passes, it, solves)
         floats[2] = scale

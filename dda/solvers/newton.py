@@ -41,7 +41,9 @@ from dda.kernels.dense_newton import CONVERGED as DENSE_CONVERGED
 from dda.kernels.dense_newton import (
     DIVERGED,
     NOT_CONVERGED,
+    NOT_FINITE,
     SINGULAR,
+    STALLED,
     dense_newton,
     newton_dense_step,
 )
@@ -69,6 +71,16 @@ ROUND_OFF = 1e-6
 # slip states are settled too (it converges in 1-3 where it converges: 60 x 60 stack of
 # benchmarks/stacks.py; one step in four there ran all 25 and failed before the retry)
 PREDICTOR_ITERATIONS = 6
+# ... and gives up on them (for the predictor that settles stick and slip too) once two iterates
+# in a row have not shrunk |R| below this fraction of the one before (iterate's contraction):
+# on the 60 x 60 stack the iterations that converge from the looser predictor shrink |R| 30 to
+# 700 times in their first step (31.7 -> 0.043 N, 9.29 -> 0.31 N), those that do not hardly
+# (197 -> 75 -> 85 -> 91 ... N, 1,150 -> 1,140 -> ... N: six iterations, each a factorization
+# of the tangent, before the retry); one iterate whose |R| grows is how Newton crosses a change
+# of the contacts' states (a block striking a stopper: 1,800 -> 4,510 -> 6e-8 N). Four runs of
+# 30 steps: the mean step 455 / 511 / 520 / 543 -> 429 / 483 / 461 / 517 ms, the median step
+# within the runs' spread (benchmarks/README.md, issue 19's nineteenth part)
+PREDICTOR_CONTRACTION = 0.5
 # a Newton step that cycles (see iterate) is halved up to this many times (each halving is one
 # iteration of the budget): on the 30 x 30 stack of benchmarks/stacks.py two sliding contacts
 # whose trial force changed sign at every full step held |R| at 30 N for the predictor's
@@ -182,19 +194,24 @@ class NewtonRaphson(NonlinearSolver):
             # converged by then, settling stick and slip first is the cheaper way on
             limit = (None if oc.friction_settled or settle_friction
                      else min(self.max_iter, PREDICTOR_ITERATIONS))
-            sol = self.iterate(problem, oc.d, limit)
+            sol = self.iterate(problem, oc.d, limit, contraction=(
+                PREDICTOR_CONTRACTION if limit is not None else 0.0))
             sol.open_close_passes = passes
             if sol.converged or oc.friction_settled:  # settling again would change nothing
                 break
         return sol
 
     def iterate(self, problem: StepProblem, d: np.ndarray,
-                max_iter: int | None = None) -> StepSolution:
+                max_iter: int | None = None, contraction: float = 0.0) -> StepSolution:
         """Newton-Raphson iterations of one step from the increments ``d`` (n_blocks, 6).
 
         The known blocks' rows of ``d`` must equal ``problem.d_known``; at most ``max_iter``
-        iterations (default: the solver's). Returns the converged trial, or a failed solution
-        whose ``residual_norms`` show what happened.
+        iterations (default: the solver's). With ``contraction`` > 0 the iteration also gives
+        up at an iterate that has not converged when neither it nor the iterate before
+        brought |R| below that fraction of the one before it (one iterate whose |R| grows is
+        how Newton crosses a change of the contacts' states; two that do not shrink it are a
+        stall). Returns the converged trial, or a failed solution whose ``residual_norms``
+        show what happened.
         """
         max_iter = self.max_iter if max_iter is None else max_iter
         el = problem.element
@@ -202,7 +219,7 @@ class NewtonRaphson(NonlinearSolver):
         pattern = problem.pattern
         if (DENSE_NEWTON and pattern.n <= DENSE_LIMIT and pattern.unknowns > 0
                 and len(el) and el.kernel_laws is not None and problem.bolts is None):
-            return self._dense(problem, d, max_iter)
+            return self._dense(problem, d, max_iter, contraction)
         d = d.copy()
         norms: list[float] = []
         factor = problem.factor(False)
@@ -222,6 +239,10 @@ class NewtonRaphson(NonlinearSolver):
                     or _at_noise_floor(problem, resp, norm, scale)):
                 norms.append(norm)
                 break
+            if (contraction > 0.0 and len(norms) >= 2 and norm > contraction * norms[-1]
+                    and norms[-1] > contraction * norms[-2]):
+                norms.append(norm)
+                return StepSolution(None, None, False, 0, it, _stalled(norms), norms)
             states = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN)
             # the contacts' states, and the direction of the sliding ones: Newton's full steps
             # can jump back and forth across the kinks of the return map (where a contact
@@ -272,7 +293,8 @@ class NewtonRaphson(NonlinearSolver):
         trial = el.trial_contacts(state, resp.t_n, resp.t_s, resp.history)
         return StepSolution(d, trial, True, 0, it, "", norms)
 
-    def _dense(self, problem: StepProblem, d: np.ndarray, max_iter: int) -> StepSolution:
+    def _dense(self, problem: StepProblem, d: np.ndarray, max_iter: int,
+               contraction: float = 0.0) -> StepSolution:
         """:meth:`iterate` on a dense system with the built-in laws: every iteration in one
         kernel call (:func:`dda.kernels.dense_newton.dense_newton`; the same decisions, the
         numbers to round-off). Its time is the step profile's ``solve``."""
@@ -285,7 +307,8 @@ class NewtonRaphson(NonlinearSolver):
             (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
              sliding) = dense_newton(
                 as_float64(d), max_iter, float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
-                CYCLE_LENGTH, as_float64(problem.block_k), as_float64(problem.block_f),
+                CYCLE_LENGTH, float(contraction), as_float64(problem.block_k),
+                as_float64(problem.block_f),
                 np.asarray(problem.free, dtype=np.bool_), np.asarray(rigid, dtype=np.bool_),
                 *dense_layout(pattern), np.asarray(el.bj, dtype=np.int64),
                 np.asarray(el.bk, dtype=np.int64), *(as_float64(a) for a in (
@@ -294,7 +317,7 @@ class NewtonRaphson(NonlinearSolver):
                 as_float64(el.shear_penalty), as_float64(el.length), *el.kernel_laws, g_se,
                 slip, sliding, bool(NOISE_FLOOR), as_float64(round_off_gap(el)))
         # a solve for every accepted iterate but the last, and for the last when it failed
-        count_solve(len(norms) - 1 + (status >= SINGULAR))
+        count_solve(len(norms) - 1 + (status in (SINGULAR, NOT_FINITE)))
         return _solution(el, status, it, d, norms, scale, closed, slipping, spring, t_s,
                          (g_se, slip, sliding))
 
@@ -312,7 +335,8 @@ class NewtonRaphson(NonlinearSolver):
              spring, t_s, g_se, slip, sliding, solves) = newton_dense_step(
                 problem.max_open_close, *pass_rules(), predictor_patience(False, True),
                 self.unsettled_predictor, self.max_iter, PREDICTOR_ITERATIONS,
-                float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS, CYCLE_LENGTH,
+                float(PREDICTOR_CONTRACTION), float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
+                CYCLE_LENGTH,
                 *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
                 *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el),
                 np.asarray(rigid, dtype=np.bool_), *(as_float64(a) for a in (
@@ -343,6 +367,8 @@ def _solution(el, status, it, d, norms, scale, closed, slipping, spring, t_s,
         return StepSolution(d, trial, True, 0, it, "", norms)
     if status == DIVERGED:
         reason = "Newton-Raphson diverged (non-finite residual)"
+    elif status == STALLED:
+        reason = _stalled(norms)
     elif status == NOT_CONVERGED:
         reason = (f"Newton-Raphson did not converge in {it} iterations "
                   f"(|R| = {norms[-1]:.3g}, {norms[-1] / scale:.3g} of the forces)")
@@ -448,6 +474,12 @@ def noise_floor(problem, resp) -> float:
     summed = assemble_vector(np.zeros((len(problem.free), 6)), problem.free, el.bj, el.bk,
                              rows, problem.rigid)
     return _norm(summed[problem.free])
+
+
+def _stalled(norms) -> str:
+    """Why Newton gave up on a contraction rule (``norms``: |R| of the accepted iterates and
+    of the one that did not shrink it enough)."""
+    return f"Newton-Raphson stalled (|R| {norms[-2]:.3g} -> {norms[-1]:.3g})"
 
 
 def _at_round_off(norms, scale) -> bool:
