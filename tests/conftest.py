@@ -120,3 +120,26 @@ def stack_scene(n, restitution=None, shear_dashpot=None):
         joint = replace(joint, shear_dashpot=shear_dashpot)
     scene.set_joint(joint)
     return scene
+
+
+@pytest.fixture(scope="module")
+def stack_step():
+    """The second Newton iterate call of the 20 x 20 stack (2,400 unknowns: the sparse path,
+    in mixed precision where PARDISO is there): its StepProblem, the predictor's increments
+    and the iteration budget."""
+    from dda.solvers import newton
+
+    captured = []
+    original = newton.NewtonRaphson.iterate
+
+    def capture(self, problem, d, max_iter=None, contraction=0.0):
+        captured.append((problem, d.copy(), max_iter))
+        return original(self, problem, d, max_iter, contraction)
+
+    newton.NewtonRaphson.iterate = capture
+    try:
+        sim = dda.Simulation(stack_scene(20), dt=1e-3, solver=dda.solvers.NewtonRaphson())
+        sim.run(2e-3, progress=False)
+    finally:
+        newton.NewtonRaphson.iterate = original
+    return captured[1]

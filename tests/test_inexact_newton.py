@@ -10,33 +10,11 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-import dda
 from dda.solvers import newton
 from dda.solvers import sparse_factor as sf
-from tests.conftest import stack_scene
 
 pytestmark = pytest.mark.skipif(not sf._pardiso_available(),
                                 reason="pypardiso/MKL not installed (no mixed precision)")
-
-
-@pytest.fixture(scope="module")
-def stack_step():
-    """The second Newton iterate call of the 20 x 20 stack (2,400 unknowns: the sparse path
-    in mixed precision): its StepProblem, the predictor's increments and the budget."""
-    captured = []
-    original = newton.NewtonRaphson.iterate
-
-    def capture(self, problem, d, max_iter=None, contraction=0.0):
-        captured.append((problem, d.copy(), max_iter))
-        return original(self, problem, d, max_iter, contraction)
-
-    newton.NewtonRaphson.iterate = capture
-    try:
-        sim = dda.Simulation(stack_scene(20), dt=1e-3, solver=dda.solvers.NewtonRaphson())
-        sim.run(2e-3, progress=False)
-    finally:
-        newton.NewtonRaphson.iterate = original
-    return captured[1]
 
 
 def _iterate(stack_step, fraction, monkeypatch):

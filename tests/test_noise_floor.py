@@ -8,31 +8,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-import dda
 from dda.kernels.dense_newton import _noise_floor
 from dda.solvers import newton
 from dda.solvers.open_close import round_off_gap
-from tests.conftest import stack_scene
-
-
-@pytest.fixture(scope="module")
-def stack_step():
-    """The second Newton iterate call of the 20 x 20 stack (2,400 unknowns, the sparse path):
-    its StepProblem, the predictor's increments and the iteration budget."""
-    captured = []
-    original = newton.NewtonRaphson.iterate
-
-    def capture(self, problem, d, max_iter=None, contraction=0.0):
-        captured.append((problem, d.copy(), max_iter))
-        return original(self, problem, d, max_iter, contraction)
-
-    newton.NewtonRaphson.iterate = capture
-    try:
-        sim = dda.Simulation(stack_scene(20), dt=1e-3, solver=dda.solvers.NewtonRaphson())
-        sim.run(2e-3, progress=False)
-    finally:
-        newton.NewtonRaphson.iterate = original
-    return captured[1]
 
 
 def _iterate(stack_step, floor, monkeypatch):

@@ -8,7 +8,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-import pytest
 
 import dda
 from dda.solvers import NewtonRaphson, newton
@@ -58,28 +57,6 @@ def test_the_one_call_kernel_stalls_alike(monkeypatch):
         np.testing.assert_array_equal(st_f[name], st_c[name], err_msg=name)
     np.testing.assert_array_equal(fused.x, composed.x)
     np.testing.assert_array_equal(fused.velocity, composed.velocity)
-
-
-@pytest.fixture(scope="module")
-def stack_step():
-    """The second Newton iterate call of the 20 x 20 stack (the sparse path), as
-    tests/test_noise_floor.py captures it."""
-    from tests.conftest import stack_scene
-
-    captured = []
-    original = newton.NewtonRaphson.iterate
-
-    def capture(self, problem, d, max_iter=None, contraction=0.0):
-        captured.append((problem, d.copy(), max_iter))
-        return original(self, problem, d, max_iter, contraction)
-
-    newton.NewtonRaphson.iterate = capture
-    try:
-        sim = dda.Simulation(stack_scene(20), dt=1e-3, solver=NewtonRaphson())
-        sim.run(2e-3, progress=False)
-    finally:
-        newton.NewtonRaphson.iterate = original
-    return captured[1]
 
 
 def test_the_sparse_iterate_stalls_on_two_weak_contractions(stack_step, monkeypatch):
