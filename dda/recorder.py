@@ -114,7 +114,10 @@ class Recorder:
         if written is None and writer is self.written[0]:
             written = self.written[1]
         if written != state.time:
-            if end and getattr(writer, "every", 1) > 1:  # a series ends at the run's end
+            # a series thinned by its writer (VTUWriter's every, interval) ends at the
+            # run's end
+            if end and (getattr(writer, "every", 1) > 1
+                        or getattr(writer, "interval", None) is not None):
                 writer.write(frame(self.model, state), last=True)
             else:
                 writer.write(frame(self.model, state))

@@ -156,7 +156,7 @@ def main(argv=None):
     duration = args.duration or raw.duration
     sim = dda.Simulation(scene, dt=args.dt, solver=make_solver(args.solver),
                          max_open_close=30)
-    writer = dda.io.VTUWriter(out / "slope", every=max(1, int(round(0.05 / sim.dt))))
+    writer = dda.io.VTUWriter(out / "slope", interval=0.05)  # a frame every 0.05 s
     result = sim.run(duration, output=writer, progress=sys.stderr.isatty())
     base_u = result.displacement(base)
     moved = np.array([np.hypot(*(result.displacement(b) - base_u).T) for b in face])

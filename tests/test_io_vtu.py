@@ -52,6 +52,43 @@ def test_a_series_written_every_few_frames_ends_at_the_runs_end(tmp_path, rock):
     assert len(writer.files) == 5
 
 
+def _two_blocks(rock):
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True, name="base")
+    scene.add_block(box(0.4, 0.2, 0.2, 0.2), rock, name="top")
+    scene.set_joint(JointMaterial(normal_penalty=2e9, shear_penalty=2e9,
+                                  friction=CoulombSingle(phi=30)))
+    return scene
+
+
+def test_a_series_written_at_an_interval_of_simulated_time(tmp_path, rock):
+    """VTUWriter(interval=1e-3) over steps of 4e-4 s writes the first step at least 1 ms
+    after the last written (0, 1.2, 2.4, ... ms) and the run's end; over frames whose
+    spacing changes (cut steps) it keeps its frames at least the interval apart."""
+    from dataclasses import replace
+
+    writer = dda.io.VTUWriter(tmp_path / "case", interval=1e-3)
+    sim = dda.Simulation(_two_blocks(rock), dt=4e-4)
+    sim.run(duration=0.01, output=writer)
+    times = [float(e.get("timestep")) for e in
+             ET.parse(writer.pvd_path).getroot().findall("./Collection/DataSet")]
+    np.testing.assert_allclose(times, [0.0, 0.0012, 0.0024, 0.0036, 0.0048, 0.006, 0.0072,
+                                       0.0084, 0.0096, 0.01], atol=1e-12)
+    frame = sim.frame()
+    steps = [0.0, 0.002, 0.0025, 0.003, 0.0031, 0.0032, 0.0045, 0.005, 0.0051, 0.0062]
+    uneven = dda.io.VTUWriter(tmp_path / "uneven", interval=2e-3)
+    for i, t in enumerate(steps):
+        uneven.write(replace(frame, time=t), last=i == len(steps) - 1)
+    assert [t for t, _ in uneven._entries] == [0.0, 0.002, 0.0045, 0.0062]
+
+
+@pytest.mark.parametrize("kwargs", [{"interval": 0.0}, {"interval": -1.0},
+                                    {"interval": float("nan")}, {"interval": 1e-3, "every": 2}])
+def test_an_interval_must_be_a_positive_time_and_alone(tmp_path, kwargs):
+    with pytest.raises(ValueError, match="VTUWriter"):
+        dda.io.VTUWriter(tmp_path / "case", **kwargs)
+
+
 def _block_rows(mesh, name):
     ids = np.concatenate(mesh.cell_data["block_id"])
     vals = np.concatenate(mesh.cell_data[name])

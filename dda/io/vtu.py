@@ -93,6 +93,11 @@ class VTUWriter:
         Path prefix of the files, for example ``"out/case"``; folders are created.
     every : int
         Write every this many recorded steps.
+    interval : float, optional
+        Write a frame once the simulated time has moved on by at least this much (s) since
+        the last frame written, whatever the steps in between: evenly spaced frames where
+        dt changes (cut steps, ``dt="auto"``). With it, ``every`` must be 1. The first frame
+        and the run's last are written either way.
     plain_names : bool
         Also write the fields that carry a unit in their name (``"displacement [m]"``) under
         their old plain names (``"displacement"``), for scripts written before.
@@ -105,14 +110,24 @@ class VTUWriter:
     'case.pvd'
     """
 
-    #: (a class default: the writers of checkpoints saved before it was an option)
+    #: (class defaults: the writers of checkpoints saved before they were options)
     plain_names = True
+    interval = None
 
-    def __init__(self, prefix, every: int = 1, plain_names: bool = True):
+    def __init__(self, prefix, every: int = 1, plain_names: bool = True,
+                 interval: float | None = None):
         self.prefix = Path(prefix)
         if int(every) < 1:
             raise ValueError("VTUWriter: every must be at least 1")
         self.every = int(every)
+        if interval is not None:
+            interval = float(interval)
+            if not (np.isfinite(interval) and interval > 0.0):
+                raise ValueError(f"VTUWriter: interval must be a positive time in s, got "
+                                 f"{interval!r}")
+            if self.every != 1:
+                raise ValueError("VTUWriter: give every or interval, not both")
+        self.interval = interval
         self.plain_names = bool(plain_names)
         self.prefix.parent.mkdir(parents=True, exist_ok=True)
         self._entries: list[tuple[float, str]] = []
@@ -132,7 +147,8 @@ class VTUWriter:
 
     def write(self, frame: Frame, last: bool = False) -> None:
         """Write one frame (called by the simulation at every recorded step); every
-        ``every``-th is written, and the ``last`` of a run whatever the count, so a series
+        ``every``-th is written (or, with ``interval``, the first frame at least that long
+        after the last written), and the ``last`` of a run whatever the count, so a series
         always ends at the run's end.
 
         The file is written under a temporary name and renamed, and the writer's count is
@@ -141,7 +157,12 @@ class VTUWriter:
         (``last_time`` tells a resumed run which frame the writer has).
         """
         n = self._n
-        if self._seen % self.every == 0 or last:
+        if self.interval is not None:
+            # (a relative slack: frame times are sums of steps, 0.05 may come as 0.0499999...)
+            due = n == 0 or frame.time >= self._entries[n - 1][0] + self.interval * (1 - 1e-9)
+        else:
+            due = self._seen % self.every == 0
+        if due or last:
             name = f"{self.prefix.name}_{n:05d}.vtu"
             path = self.prefix.parent / name
             tmp = path.with_name(path.name + ".tmp.vtu")
