@@ -30,7 +30,9 @@ def test_newton_stops_at_the_noise_floor_of_round_off_contacts(stack_step, monke
     assert floor.iterations == 1 and strict.iterations >= floor.iterations + 2
     # the same iterate, which the tolerance and the stagnation rule did not end (the strict
     # iteration went on from it): only the noise floor ended it
-    assert floor.residual_norms == strict.residual_norms[:2]
+    # (to round-off: outside a run PARDISO may solve on several threads, and a Newton
+    # correction's unrefined single-precision solve then differs in its last bits)
+    np.testing.assert_allclose(floor.residual_norms, strict.residual_norms[:2], rtol=1e-6)
     np.testing.assert_allclose(floor.d, strict.d, rtol=0.0, atol=1e-11)
     change = np.abs(floor.contacts.t_n - strict.contacts.t_n)
     assert change.max() <= 1e-6 * np.abs(strict.contacts.t_n).max()

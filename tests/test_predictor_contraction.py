@@ -69,9 +69,11 @@ def test_the_sparse_iterate_stalls_on_two_weak_contractions(stack_step, monkeypa
     runs = {c: NewtonRaphson().iterate(replace(problem), d, max_iter, contraction=c)
             for c in (0.0, 0.5, 1e-3)}
     assert runs[0.0].converged and runs[0.5].converged
-    assert runs[0.5].residual_norms == runs[0.0].residual_norms
-    np.testing.assert_array_equal(runs[0.5].d, runs[0.0].d)
+    # (to round-off: outside a run PARDISO may solve on several threads, and a Newton
+    # correction's unrefined single-precision solve then differs in its last bits)
+    np.testing.assert_allclose(runs[0.5].residual_norms, runs[0.0].residual_norms, rtol=1e-6)
+    np.testing.assert_allclose(runs[0.5].d, runs[0.0].d, rtol=0.0, atol=1e-12)
     stalled = runs[1e-3]
     assert not stalled.converged and stalled.d is None
     assert stalled.reason.startswith("Newton-Raphson stalled")
-    assert stalled.residual_norms == runs[0.0].residual_norms[:3]
+    np.testing.assert_allclose(stalled.residual_norms, runs[0.0].residual_norms[:3], rtol=1e-6)

@@ -283,14 +283,16 @@ def test_a_refined_solve_stops_at_the_callers_residual(symmetric):
     loose = sf.PardisoFactor(symmetric, precision="auto")
     x = loose.solve(k, rhs, atol=2.0 * first)  # the unrefined solve is within it
     assert (loose.refinements, loose.inexact_solves, loose.factorizations) == (0, 1, 1)
-    assert np.linalg.norm(rhs - k @ x) <= 2.0 * first
-    np.testing.assert_array_equal(x, loose._apply(rhs))
+    # the unrefined solve (not the bits of another: PARDISO's solves with the same factors
+    # may differ at single precision's round-off from call to call)
+    assert 1e-8 * np.linalg.norm(rhs) < np.linalg.norm(rhs - k @ x) <= 2.0 * first
     # an atol below the first residual: refined once, to MIXED_RTOL as without it, to the
     # same answer
     x = loose.solve(k, rhs, atol=0.5 * first)
     assert (loose.refinements, loose.inexact_solves, loose.factorizations) == (1, 1, 1)
-    # (two PARDISO handles' factors of one matrix may differ in their last bits)
-    same = {"rtol": 0.0, "atol": 1e-13 * np.abs(exact).max()}
+    # (two PARDISO handles' factors of one matrix, and two solves with one's, may differ in
+    # their last bits; refined, the answers agree to about MIXED_RTOL)
+    same = {"rtol": 0.0, "atol": 10 * sf.MIXED_RTOL * np.abs(exact).max()}
     np.testing.assert_allclose(x, exact, **same)
     # none or 0: refined in full
     for atol in (None, 0.0):
