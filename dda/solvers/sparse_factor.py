@@ -67,7 +67,9 @@ systems (dynamic analysis: Newmark's inertia on the diagonal) the first solve is
 3e-6 of the solution and one refinement leaves 2e-13 to 8e-13 of it (the double factorization:
 about 1e-15). The refinement stops when the estimated error of the new iterate,
 :math:`\|\Delta x_i\|\,\rho_i` with :math:`\rho_i = \|\Delta x_i\| / \|\Delta x_{i-1}\|`,
-is below ``MIXED_RTOL`` of :math:`\|x\|`; a refinement that shrinks the correction by less than
+is below ``MIXED_RTOL`` of :math:`\|x\|`, or, for a caller that needs less (a Newton correction:
+``solve``'s ``atol``), once the residual :math:`\|b - K x_i\|` is within ``atol``; a
+refinement that shrinks the correction by less than
 ``MIXED_CONTRACTION`` (an ill-conditioned matrix, a static analysis' loose block), a PARDISO
 error or ``MIXED_REFINEMENTS`` refinements without convergence send the matrix back to a
 double-precision factorization; when that one succeeds the holder stays in double precision
