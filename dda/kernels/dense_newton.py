@@ -127,11 +127,20 @@ def _cycle_back(pattern, patterns, count, cycle_length):
 
 
 @njit(cache=True)
+def stalled(norm, last, before, contraction):
+    """Newton's stall rule (:meth:`dda.solvers.NewtonRaphson.iterate`): with ``contraction``
+    > 0, an iterate of |R| ``norm`` after accepted ones of ``last`` and ``before`` (the one
+    before it) has stalled when neither it nor the last brought |R| below ``contraction`` of
+    the one before."""
+    return contraction > 0.0 and norm > contraction * last and last > contraction * before
+
+
+@njit(cache=True)
 def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, contraction,
-                 block_k, block_f,
-                 free, rigid, n, block_base, block_step, free_blocks, pair_base, pair_step,
-                 side_row, side_block, keep, reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0,
-                 shear0, release, has_dashpot, kn, pn, ps, length, kind, mu_s, mu_d, cohesion,
+                 block_k, block_f, free, rigid, n, block_base, block_step, free_blocks,
+                 pair_base, pair_step, side_row, side_block, keep, reduced, bj, bk, p1, p2, p3,
+                 a1, a2, a3, xi0, shear0, release, has_dashpot, kn, pn, ps, length, kind, mu_s,
+                 mu_d, cohesion,
                  face, g_se, slip, sliding, noise_floor, gap_tol):
     """Newton-Raphson iterations of one step on a dense system (module docstring).
 
@@ -211,8 +220,7 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, co
             norms[n_norms] = norm
             n_norms += 1
             break
-        if (contraction > 0.0 and n_norms >= 2 and norm > contraction * norms[n_norms - 1]
-                and norms[n_norms - 1] > contraction * norms[n_norms - 2]):
+        if n_norms >= 2 and stalled(norm, norms[n_norms - 1], norms[n_norms - 2], contraction):
             norms[n_norms] = norm
             n_norms += 1
             status = STALLED
@@ -286,9 +294,8 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
     row do not shrink |R| to ``predictor_contraction`` of the last, when the predictor left
     stick and slip unsettled) and, when those do not converge, the predictor with stick and
     slip settled too (or, after ``retry_patience`` passes that open or close no contact, not)
-    and Newton
-    again with all its ``max_iter``. With ``unsettled``, an OPEN-CLOSE that does not settle in its
-    passes is a predictor all the same (its last pass's increments, Newton's whole
+    and Newton again with all its ``max_iter``. With ``unsettled``, an OPEN-CLOSE that does not
+    settle in its passes is a predictor all the same (its last pass's increments, Newton's whole
     ``max_iter``; ``NewtonRaphson(unsettled_predictor=True)``).
 
     The arguments are :func:`dda.kernels.dense_passes.dense_passes`' from ``block_k`` to

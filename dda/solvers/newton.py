@@ -46,6 +46,7 @@ from dda.kernels.dense_newton import (
     STALLED,
     dense_newton,
     newton_dense_step,
+    stalled,
 )
 from dda.kernels.dense_passes import NOT_SETTLED
 from dda.kernels.open_close import as_float64, kernel_history, kernel_history_dict
@@ -239,8 +240,7 @@ class NewtonRaphson(NonlinearSolver):
                     or _at_noise_floor(problem, resp, norm, scale)):
                 norms.append(norm)
                 break
-            if (contraction > 0.0 and len(norms) >= 2 and norm > contraction * norms[-1]
-                    and norms[-1] > contraction * norms[-2]):
+            if len(norms) >= 2 and stalled(norm, norms[-1], norms[-2], contraction):
                 norms.append(norm)
                 return StepSolution(None, None, False, 0, it, _stalled(norms), norms)
             states = np.where(resp.closed, np.where(resp.slipping, SLIP, STICK), OPEN)
@@ -308,8 +308,8 @@ class NewtonRaphson(NonlinearSolver):
              sliding) = dense_newton(
                 as_float64(d), max_iter, float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
                 CYCLE_LENGTH, float(contraction), as_float64(problem.block_k),
-                as_float64(problem.block_f),
-                np.asarray(problem.free, dtype=np.bool_), np.asarray(rigid, dtype=np.bool_),
+                as_float64(problem.block_f), np.asarray(problem.free, dtype=np.bool_),
+                np.asarray(rigid, dtype=np.bool_),
                 *dense_layout(pattern), np.asarray(el.bj, dtype=np.int64),
                 np.asarray(el.bk, dtype=np.int64), *(as_float64(a) for a in (
                     g.p1, g.p2, g.p3, *el.maps, el.contacts.xi0, el.shear0, el.release)),
@@ -336,8 +336,7 @@ class NewtonRaphson(NonlinearSolver):
                 problem.max_open_close, *pass_rules(), predictor_patience(False, True),
                 self.unsettled_predictor, self.max_iter, PREDICTOR_ITERATIONS,
                 float(PREDICTOR_CONTRACTION), float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
-                CYCLE_LENGTH,
-                *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
+                CYCLE_LENGTH, *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
                 *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el),
                 np.asarray(rigid, dtype=np.bool_), *(as_float64(a) for a in (
                     g.p1, g.p2, g.p3, *el.maps, c.xi0, el.shear0)), bool(NOISE_FLOOR))

@@ -195,9 +195,9 @@ class SparseFactor:
         self.near_solves = 0  # solves by GMRES with an earlier factorization (solve_near)
 
     def solve(self, k: sp.csc_matrix, rhs: np.ndarray, atol: float | None = None) -> np.ndarray:
-        """Solve ``k x = rhs``. ``atol``: the caller needs the residual ``|rhs - k x|``
-        (2-norm) no smaller than this; a backend that refines its solution (PARDISO's mixed
-        precision) may stop there (an inexact Newton step). None: as accurate as it can."""
+        """Solve ``k x = rhs``. ``atol``: the residual ``|rhs - k x|`` (2-norm) the caller
+        accepts; a backend that refines its solution (PARDISO's mixed precision) may stop
+        once it is there (an inexact Newton step). None: as accurate as it can."""
         raise NotImplementedError
 
     def solve_near(self, k, rhs: np.ndarray, atol: float | None = None) -> np.ndarray:
