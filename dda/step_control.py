@@ -12,6 +12,14 @@ moved too far do not: those end when the block slows down. Without this back-off
 contacts cannot settle at twice its step size spends a cut every ``grow_after + 1`` steps
 trying (the 311-block cut slope of ``examples/jointed_slope.py``: 10% of its steps, each a
 failed step of up to ``max_open_close`` passes).
+
+The control remembers the size whose try failed (``ceiling``): the long wait holds only the
+tries at that size or above. A step cut at the working size (a hard step, not a try) grows back
+to it after ``grow_after`` steps, and holding there says nothing about the size above, so it
+neither resets the wait nor lets the next try come early. With one wait for every size, the
+cut slope, its steps at 1.25e-4 s and its tries at 2.5e-4 s failing, dropped to 6.25e-5 s on a
+hard step, waited the long wait to get back, held, reset the wait, and tried 2.5e-4 s again
+``grow_after`` steps later: 44 of its 86 cuts in 0.3 s were such tries (legacy).
 """
 
 from __future__ import annotations
@@ -54,6 +62,9 @@ class StepControl:
     contact_cuts: int = 0  # steps cut because the contacts would not settle
     wait: int = 0  # accepted steps before the next doubling (0: grow_after)
     probing: bool = False  # the step size was just doubled and has not held yet
+    # the smallest step size whose try failed for its contacts since a try there last held
+    # (0: none); the wait holds the tries at it and above
+    ceiling: float = 0.0
     # the untracked penetration (tolerances) of this step's last refused try (-1: none yet)
     tried_untracked: float = -1.0
 
@@ -82,6 +93,7 @@ class StepControl:
         if self.probing and contact_cut(reason):
             # the contacts did not settle at the doubled size: wait longer before the next try
             self.wait = min(self.max_wait, 2 * self._wait())
+            self.ceiling = dt if self.ceiling == 0.0 else min(self.ceiling, dt)
         self.probing = False
         self.dt_now = dt / 2.0
         self.good_steps = 0
@@ -94,13 +106,18 @@ class StepControl:
         self.good_steps += 1
         if self.probing and self.good_steps >= self.grow_after:  # the doubled size held
             self.probing = False
-            self.wait = self.grow_after
-        if self.dt_now < self.dt and self.good_steps >= self._wait():
+            if self.ceiling == 0.0 or self.dt_now >= self.ceiling * (1.0 - 1e-9):
+                self.wait = self.grow_after
+                self.ceiling = 0.0
+        if self.dt_now < self.dt and self.good_steps >= self._wait(2.0 * self.dt_now):
             self.dt_now = min(self.dt, 2.0 * self.dt_now)
             self.good_steps = 0
             self.probing = True
 
-    def _wait(self) -> int:
+    def _wait(self, size: float | None = None) -> int:
+        """Accepted steps before a try at ``size`` (default: at or above the ceiling)."""
+        if size is not None and self.ceiling > 0.0 and size < self.ceiling * (1.0 - 1e-9):
+            return self.grow_after  # below the size that failed: back to the working size
         return max(self.wait, self.grow_after)
 
     def check_can_go_on(self, report, tries: int, dt: float, committed) -> None:

@@ -170,3 +170,13 @@ def test_a_resumed_run_writes_only_beside_its_checkpoint(tmp_path):
         dda.Simulation.resume(ckpt)
     assert dda.Simulation.resume(ckpt, allow_outside_output=True).output.prefix == (
         tmp_path / "series" / "case")
+
+
+def test_a_checkpoint_from_before_the_control_remembered_its_failed_size_resumes(tmp_path):
+    """Checkpoints of this layout written before ``StepControl.ceiling`` existed resume, with
+    no failed size remembered; a ceiling that is not a number is refused."""
+    path = _checkpoint(tmp_path)
+    sim = dda.Simulation.resume(_edit(path, lambda h: h["control"].pop("ceiling")))
+    assert sim.control.ceiling == 0.0
+    with pytest.raises(ValueError, match="control.ceiling"):
+        dda.Simulation.resume(_edit(path, lambda h: h["control"].update(ceiling="x")))

@@ -128,6 +128,40 @@ def test_run_tells_a_callback_every_committed_step():
     assert all(ok for _, ok in seen)
 
 
+def test_a_hard_step_below_a_failed_try_grows_back_at_once_and_keeps_the_wait():
+    """The control remembers the size whose try failed: a step cut at the working size grows
+    back to it after grow_after steps (not the long wait), and holding there neither resets the
+    wait nor brings the next try at the failed size early."""
+    control = StepControl(dt=1e-3)
+    g = control.grow_after
+    control.cut(1e-3, "OPEN-CLOSE did not settle in 30 passes")  # works at 5e-4
+    for _ in range(3):  # tries at 1e-3 fail: the wait grows to 8 g
+        while control.dt_now == 5e-4:
+            control.accepted()
+        control.cut(control.dt_now, "OPEN-CLOSE did not settle in 30 passes")
+    assert control.ceiling == 1e-3 and control._wait() == 8 * g
+    for _ in range(10):
+        control.accepted()
+    control.cut(5e-4, "OPEN-CLOSE did not settle in 30 passes")  # a hard step at 5e-4
+    steps = 0
+    while control.dt_now == 2.5e-4:
+        control.accepted()
+        steps += 1
+    assert steps == g  # back at the working size after grow_after steps
+    for _ in range(g):  # ... and it holds there
+        control.accepted()
+    assert not control.probing and control.ceiling == 1e-3 and control._wait() == 8 * g
+    steps = 0
+    while control.dt_now == 5e-4:
+        control.accepted()
+        steps += 1
+    assert steps == 8 * g - g  # the next try at 1e-3 waits out the long wait
+    # a try at the failed size that holds forgets it
+    for _ in range(g):
+        control.accepted()
+    assert control.ceiling == 0.0 and control._wait() == g
+
+
 def test_a_doubled_step_size_that_fails_at_once_waits_longer_before_the_next_try():
     """Where the contacts cannot settle at twice the working step size, every try costs a
     failed step: the wait before the next try doubles (up to max_wait) and resets once a
