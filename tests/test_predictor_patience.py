@@ -7,12 +7,15 @@ one contact between stick and slip and found 10 to 17 sliding contacts' lagged n
 off in every pass until the limit of 30 cut the step. That was without the joints' shear
 dashpot (``JointMaterial.shear_dashpot``, on by default since), which the wall here keeps off:
 with it the same step settles in time without the rule.
+
+That cycle went through a sliding contact whose lagged normal force was zero: Shi's rule (a
+slip whose trial force turns against the pass's friction load sticks) read the zero load as a
+reversal. With a zero load left to the law, the step settles in 8 passes without the rule too;
+the rule stays, for cycles of the lagged forces themselves.
 """
 
 import sys
 from pathlib import Path
-
-import pytest
 
 import dda
 import dda.solvers.open_close as oc
@@ -49,8 +52,11 @@ def test_the_numpy_passes_follow_the_same_rule():
     assert result.stats.cuts == []
 
 
-def test_without_the_rule_the_step_is_cut(monkeypatch):
+def test_without_the_rule_the_step_settles_too(monkeypatch):
+    """(It was cut at 9 ms: see the module docstring.)"""
+    with_rule = _run()
     monkeypatch.setattr(oc, "LAG_PATIENCE", 10**6)
-    result = _run()
-    assert [c[2] for c in result.stats.cuts] == ["OPEN-CLOSE did not settle in 30 passes"]
-    assert result.stats.cuts[0][0] == pytest.approx(9e-3)
+    without = _run()
+    assert without.stats.cuts == []
+    assert list(without.stats["open_close_passes"]) == list(with_rule.stats["open_close_passes"])
+    assert max(without.stats["open_close_passes"]) <= 8

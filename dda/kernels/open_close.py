@@ -366,8 +366,10 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
                                  ps, length, check)
     for i in range(m):
         if check[i]:
-            # a slip that reverses against the friction load of this pass sticks
-            reversed_ = state[i] == _SLIP and np.sign(t_ret[i]) != np.sign(t_slip[i])
+            # a slip that reverses against the friction load of this pass sticks (a load of
+            # zero, from a lagged normal force of zero, has no direction to reverse)
+            reversed_ = (state[i] == _SLIP and t_slip[i] != 0.0
+                         and np.sign(t_ret[i]) != np.sign(t_slip[i]))
             new_state[i] = _SLIP if slipping[i] and not reversed_ else _STICK
     # the lagged normal force, and the cycle rule
     largest = 0.0

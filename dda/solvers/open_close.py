@@ -39,7 +39,12 @@ off, in every pass until the limit of 30 cut the step. The predictor run again t
 Three rules keep the iteration honest (each was needed; tests/test_dynamics.py shows why):
 - a sliding contact whose trial shear force turns against the friction load of the pass
   sticks (Shi's rule; without it friction does positive work and a block that hits a stop
-  is thrown back);
+  is thrown back); a load of zero (the contact's lagged normal force was zero: a pass had
+  opened it, or the cycle rule below held it closed at no force) has no direction, and the
+  law decides. Read as a reversal, it stuck a contact that its own friction load opens,
+  stuck it loaded up, it slid and opened again: a cycle of four passes until the pass limit
+  (12 of the 71 failed steps of ``examples/jointed_slope.py``'s first 0.3 s, and the
+  1,000-brick wall's cut step of ``tests/test_predictor_patience.py``);
 - the pass only counts as settled when every sliding contact's lagged normal force agrees with
   the pass's own within ``NORMAL_FORCE_RTOL`` (otherwise a one-pass penetration spike sets the
   friction, and a sliding block decelerates at several times mu g), give or take
@@ -568,8 +573,9 @@ def _next_states(el, state, history, gap, dgs, t_slip, held, gap_tol):
     new_state = np.where(closed, np.where(state == OPEN, STICK, state), OPEN).astype(np.int8)
     check = closed & ~held & ~noise
     t_trial, slipping, _ = el.friction(history, dgs, t_n, where=check)
-    # a slip that reverses against the friction load of this pass sticks
-    reversed_ = (state == SLIP) & (np.sign(t_trial) != np.sign(t_slip))
+    # a slip that reverses against the friction load of this pass sticks; a load of zero
+    # (its lagged normal force was zero: the contact had opened) has no direction to reverse
+    reversed_ = (state == SLIP) & (t_slip != 0.0) & (np.sign(t_trial) != np.sign(t_slip))
     new_state[check] = np.where(slipping[check] & ~reversed_[check], SLIP, STICK)
     return new_state, t_n
 
