@@ -106,7 +106,7 @@ class StepControl:
         self.good_steps += 1
         if self.probing and self.good_steps >= self.grow_after:  # the doubled size held
             self.probing = False
-            if self.ceiling == 0.0 or self.dt_now >= self.ceiling * (1.0 - 1e-9):
+            if not self._below_ceiling(self.dt_now):
                 self.wait = self.grow_after
                 self.ceiling = 0.0
         if self.dt_now < self.dt and self.good_steps >= self._wait(2.0 * self.dt_now):
@@ -116,9 +116,13 @@ class StepControl:
 
     def _wait(self, size: float | None = None) -> int:
         """Accepted steps before a try at ``size`` (default: at or above the ceiling)."""
-        if size is not None and self.ceiling > 0.0 and size < self.ceiling * (1.0 - 1e-9):
+        if size is not None and self._below_ceiling(size):
             return self.grow_after  # below the size that failed: back to the working size
         return max(self.wait, self.grow_after)
+
+    def _below_ceiling(self, size: float) -> bool:
+        """Whether ``size`` is below the remembered failed size (False when there is none)."""
+        return self.ceiling > 0.0 and size < self.ceiling * (1.0 - 1e-9)
 
     def check_can_go_on(self, report, tries: int, dt: float, committed) -> None:
         """After a cut: raise :class:`dda.SimulationError` when cutting dt further cannot
