@@ -378,7 +378,7 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
             history["slip"], np.zeros(m) if sliding is None else sliding, law, initial,
             k_eff, f_eff, known[2], *dense_layout(pattern), SPRING_TERMS, oc.GAP_ROUND_OFF,
             oc._COORDINATE_ROUND_OFF, settings.max_open_close, float(oc.SETTLE_BAND),
-            (*pass_rules(), oc.RETRY_PATIENCE),
+            (*pass_rules(), oc.RETRY_PATIENCE, oc.LAG_SECANT_FROM),
             bool(getattr(solver, "unsettled_predictor", False)),
             int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
             float(newton_module.PREDICTOR_CONTRACTION), float(getattr(solver, "tol", 1.0)),

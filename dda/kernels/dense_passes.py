@@ -110,9 +110,9 @@ def single_switch(state, proposed, gap):
 
 @njit(cache=True)
 def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
-                 patience, block_k, block_f, d_known, n, block_base, block_step, free_blocks,
-                 pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms, bj,
-                 bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot,
+                 patience, secant_from, block_k, block_f, d_known, n, block_base, block_step,
+                 free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows,
+                 terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot,
                  reference, release, kind, mu_s, mu_d, cohesion, face, g_se, sliding, t_stick,
                  state, held, gap_tol, t_n_lag):
     """Every pass of one step's OPEN-CLOSE iteration on a dense system (module docstring).
@@ -120,8 +120,9 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     Parameters
     ----------
     max_passes : passes allowed
-    settle_friction, band, rtol, floor, cycle_tension, relax_after, patience : the
-        iteration's rules (:func:`dda.kernels.open_close.pass_judge`)
+    settle_friction, band, rtol, floor, cycle_tension, relax_after, patience, secant_from :
+        the iteration's rules (:func:`dda.kernels.open_close.pass_judge`; ``secant_from`` 0
+        for the fully implicit method's predictor)
     block_k, block_f, d_known : the step's block matrices, forces and known increments
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
         the dense layout of :class:`dda.solvers.linear.SystemPattern`
@@ -155,6 +156,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     pinned = np.zeros(m, dtype=np.bool_)
     calm = np.zeros(1, dtype=np.int64)
     lag_error = np.zeros(m)
+    lag_memory = np.zeros((m, 3))
     seen = np.empty((max_passes + 1, m), dtype=np.int8)
     seen[0] = state
     n_seen = 1
@@ -194,10 +196,10 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
             dgs[c] = s_
             judged[c] = gap[c] - release[c] if has_dashpot else gap[c]
         new_state, _, done, friction_settled, next_lag, lag_error, _ = pass_judge(
-            state, held, judged, dgs, t_slip, t_n_lag, lag_error, flips, pinned, calm,
-            gap_tol, kn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj, bk,
-            free, settle_friction, band, passes, rtol, floor, cycle_tension, relax_after,
-            patience)
+            state, held, judged, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
+            calm, gap_tol, kn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj,
+            bk, free, settle_friction, band, passes, rtol, floor, cycle_tension, relax_after,
+            patience, secant_from)
         if done:
             return CONVERGED, passes, d, new_state, gap.copy(), dgs.copy(), friction_settled
         changed = False
@@ -241,11 +243,11 @@ def first_states(state0, over, gap0, gap_tol, explicit):
 
 @njit(cache=True)
 def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, patience,
-                      block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base,
-                      pair_step, side_row, side_block, keep, reduced, rows, terms, bj, bk, free,
-                      e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot, reference,
-                      release, kind, mu_s, mu_d, cohesion, face, state0, g_se0, slip0, sliding0,
-                      t_n0, gap_tol):
+                      secant_from, block_k, block_f, d_known, n, block_base, block_step,
+                      free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows,
+                      terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot,
+                      dashpot, reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se0,
+                      slip0, sliding0, t_n0, gap_tol):
     """Legacy DDA's whole step on a dense system (:class:`dda.solvers.LegacyPullBack`): the
     pull-back and first states of :func:`dda.solvers.open_close._start`, every OPEN-CLOSE
     pass (:func:`dense_passes`) and the step's end (:func:`dda.kernels.open_close.legacy_end`
@@ -271,7 +273,8 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
                                                     g_se0, slip0, sliding0, t_n0, ps, length)
     state, held = first_states(state0, over, gap0, gap_tol, True)
     status, passes, d, state, gap, dgs, _ = dense_passes(
-        max_passes, True, band, rtol, floor, cycle_tension, relax_after, 0, block_k,
+        max_passes, True, band, rtol, floor, cycle_tension, relax_after, 0, secant_from,
+        block_k,
         block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
         side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,
         length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,

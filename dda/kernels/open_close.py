@@ -31,6 +31,7 @@ from numba import njit
 
 __all__ = ["COULOMB", "TRANSITION", "TRANSITION_FACE", "round_off_gaps", "law_forces",
            "law_trial", "law_return_map", "law_response", "step_start", "pass_loads", "pass_judge",
+           "next_lag_force",
            "legacy_end", "legacy_springs", "kernel_history", "kernel_history_dict",
            "as_float64"]
 
@@ -332,18 +333,19 @@ def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev,
 
 
 @njit(cache=True)
-def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned, calm,
-               gap_tol, pn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj,
-               bk, free, settle_friction, band, passes, rtol, floor, cycle_tension,
-               relax_after, patience):
+def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
+               calm, gap_tol, pn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding,
+               bj, bk, free, settle_friction, band, passes, rtol, floor, cycle_tension,
+               relax_after, patience, secant_from):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
     Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
     the states the pass asks for (after the cycle rule), its normal forces, whether the
     iteration has settled, whether the stick and slip states settled too, the lagged normal
     force of the next pass with this pass's lag error, and which contacts' lagged force
-    counts as settled. ``flips``, ``pinned`` and ``calm`` (a 1-element count of the passes in
-    a row that changed no contact between open and closed) change in place; the iteration has
+    counts as settled. ``flips``, ``pinned``, ``calm`` (a 1-element count of the passes in
+    a row that changed no contact between open and closed) and ``lag_memory`` (:func:`next_lag`)
+    change in place; the iteration has
     settled, its friction not, once ``calm`` reaches ``patience`` (0: never), whatever the
     friction and lagged forces (:func:`dda.solvers.open_close.predictor_patience`).
     """
@@ -412,13 +414,49 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, flips, pinned,
     if not done and patience > 0 and calm[0] >= patience:
         done = True
         friction_settled = False
+    next_lag, error = next_lag_force(state, gap, pn, t_n, t_n_lag, lag_error, lag_memory,
+                                     passes, relax_after, secant_from)
+    return new_state, t_n, done, friction_settled, next_lag, error, lag_ok
+
+
+@njit(cache=True)
+def next_lag_force(state, gap, pn, t_n, t_n_lag, lag_error, lag_memory, passes, relax_after,
+                   secant_from):
+    """The lagged normal force of the next pass and this pass's lag error ``N - N_lag``
+    (:func:`dda.solvers.open_close.next_lag` is the same rule in numpy, the reference).
+
+    A contact's own normal force ``N``, but where the error changed sign since the last pass
+    (an oscillation): from pass ``secant_from`` on (0: never), on a contact closed in this pass
+    and the last, the secant step ``N_lag + w (p_n g - N_lag)``, ``w = -(N_lag - N_lag') /
+    (e - e')`` with ``e = p_n g - N_lag`` (the spring force less the lagged force, a tension
+    not cut off; primes: the last pass), capped at zero, when ``0.05 < w < 1``; from pass
+    ``relax_after`` on, otherwise, the mean ``(N + N_lag) / 2``. ``lag_memory`` (m, 3) holds
+    each contact's lagged force, spring force and closed flag (1.0) of the last pass, and is
+    updated in place.
+    """
+    m = t_n.shape[0]
     next_lag = t_n.copy()
     error = np.empty(m)
     for i in range(m):
         error[i] = t_n[i] - t_n_lag[i]
-        if passes >= relax_after and error[i] * lag_error[i] < 0.0:
+        spring = pn[i] * gap[i]
+        closed = state[i] != _OPEN
+        oscillates = error[i] * lag_error[i] < 0.0
+        secant = False
+        if (oscillates and secant_from > 0 and passes >= secant_from and closed
+                and lag_memory[i, 2] != 0.0):
+            change = (spring - t_n_lag[i]) - (lag_memory[i, 1] - lag_memory[i, 0])
+            if change != 0.0:
+                w = -(t_n_lag[i] - lag_memory[i, 0]) / change
+                if 0.05 < w < 1.0:
+                    next_lag[i] = _np_min(t_n_lag[i] + w * (spring - t_n_lag[i]), 0.0)
+                    secant = True
+        if not secant and oscillates and passes >= relax_after:
             next_lag[i] = 0.5 * (t_n[i] + t_n_lag[i])
-    return new_state, t_n, done, friction_settled, next_lag, error, lag_ok
+        lag_memory[i, 0] = t_n_lag[i]
+        lag_memory[i, 1] = spring
+        lag_memory[i, 2] = 1.0 if closed else 0.0
+    return next_lag, error
 
 
 @njit(cache=True)
