@@ -23,7 +23,8 @@ Prints, for each solver:
   stacks of ``benchmarks/results/stacks.md`` (run ``benchmarks/stacks.py`` first). Target:
   at most 1.2.
 
-Each run is its own process. Writes ``benchmarks/results/targets.md``.
+Each run is its own process. Writes ``benchmarks/results/targets.md`` (a run of fewer cases,
+solvers or seconds only with ``--out``).
 """
 
 from __future__ import annotations
@@ -122,8 +123,13 @@ def main(argv=None):
     ap.add_argument("--cases", nargs="+", default=["rock", "cut", "cut-auto"],
                     choices=["rock", "cut", "cut-auto"])
     ap.add_argument("--one", nargs=3, help=argparse.SUPPRESS)
-    ap.add_argument("--out", default=str(HERE / "results" / "targets.md"))
+    ap.add_argument("--out", default=None,
+                    help="the table (default: results/targets.md for the whole run; a run of "
+                         "fewer cases, solvers or seconds writes none unless given one)")
     args = ap.parse_args(argv)
+    if args.out is None and all(getattr(args, k) == ap.get_default(k) for k in (
+            "rock_slope_seconds", "cut_slope_seconds", "solvers", "cases")):
+        args.out = str(HERE / "results" / "targets.md")
     if args.one:
         case, solver, seconds = args.one
         run = {"rock": rock_slope, "cut": cut_slope,
@@ -150,6 +156,9 @@ def main(argv=None):
             + "".join(f"- {_line(r)}\n" for r in rows)
             + "".join(f"- growth of a step with blocks (N x N stacks), {s}: blocks^{g:.2f} "
                       "(target at most 1.2)\n" for s, g in growth.items()))
+    if args.out is None:  # a part of the run must not overwrite the whole run's table
+        print("a partial run: results/targets.md not written (--out FILE to keep it)")
+        return rows
     Path(args.out).write_text(text)
     print(f"wrote {args.out}")
     return rows

@@ -6,21 +6,22 @@ into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``)
 thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
 shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 
-With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 28 s: 1,261
-steps, 45 of them cut because OPEN-CLOSE did not settle in 30 passes (9.5 passes a step), and
-the face blocks end 22.0 mm (median) and 28.2 mm (most) from where they started relative to
+With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 25 s: 1,299
+steps, 35 of them cut because OPEN-CLOSE did not settle in 30 passes (8.1 passes a step), and
+the face blocks end 21.9 mm (median) and 27.4 mm (most) from where they started relative to
 the base. ``--solver newton``: about 43 s, 1,151 steps, 43 cut, 22.7 / 27.6 mm. The penalty is
 stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x 1.6 m block's contact
 period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the contacts settle only at a
-fraction of the 2e-3 s asked for and the steps average 2.4e-4 s; ``dda.PenaltyWarning`` says so
-after 20 cuts. About half the cuts are tries at twice the working step that fail, the rest
-steps whose OPEN-CLOSE ends in a cycle of a few contacts' states and lagged normal forces.
+fraction of the 2e-3 s asked for and the steps average 2.3e-4 s; ``dda.PenaltyWarning`` says so
+after 20 cuts. About half the cuts are tries at twice the working step that fail (20 of the
+35), the rest steps whose OPEN-CLOSE ends in a cycle of a few contacts' states and lagged
+normal forces.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``; ``sim.choices``
 is printed): blocks carry blocks here, so the penalty is twice the rock's Young's modulus,
 2e10 N/m, at dt 2.4e-4 s (3 times the lightest block's inertia), for both solvers. It runs the
-0.3 s in about 24 s (legacy: 1,278 steps, 1 cut) and 37 s (Newton: 1,302 steps, 3 cut), and
-the face blocks move 22.8 / 28.9 mm and 23.3 / 28.4 mm. Joints softer than the rock make the
+0.3 s in about 23 s (legacy: 1,274 steps, none cut) and 37 s (Newton: 1,302 steps, 3 cut),
+and the face blocks move 22.7 / 30.2 mm and 23.3 / 28.4 mm. Joints softer than the rock make the
 whole mass softer and its face moves further (legacy, 0.3 s, median / most): 55 / 85 mm at
 2.2e9 N/m (57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: it is the penalty, not dt),
 38 / 65 mm at 5e9, 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10 (measured before

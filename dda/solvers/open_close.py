@@ -150,7 +150,7 @@ from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_so
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
            "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "LAG_SECANT_FROM", "LAG_PATIENCE",
            "RETRY_PATIENCE",
-           "SETTLE_BAND", "predictor_patience", "round_off_gap"]
+           "SETTLE_BAND", "predictor_patience", "round_off_gap", "next_lag"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
