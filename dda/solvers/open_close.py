@@ -83,8 +83,8 @@ Legacy DDA takes, from pass ``LAG_SECANT_FROM`` on, the secant step instead (:fu
 where a contact closed in this pass and the last oscillates, its two passes give the slope
 ``-b`` of its map, and the lag moves to the map's fixed point ``a / (1 + b)``, so a sliding
 block's friction that its normal force answers with ``b`` well above 1 (2 to 4 on the faces of
-``examples/jointed_slope.py``, where halving does not contract) settles in a pass, and one with
-``b`` near 0 is barely touched. On that example (0.3 s, three runs) its steps at 1.25e-4 s
+``examples/jointed_slope.py``, where halving contracts by 0.5 to 1.5) settles in a pass, and one
+with ``b`` near 0 is barely touched. On that example (0.3 s, three runs) its steps at 1.25e-4 s
 took 8.45-8.95 passes before and 6.45-6.92 with it, those at 2.5e-4 s 11.1-14.2 and 9.6-10.3
 (``benchmarks/secant_lag.py``). From pass 2, where the first pass's switches still move the
 other contacts' forces, it saved about as much there but cost the stacks 2-4% more passes; from
