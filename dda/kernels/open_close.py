@@ -344,10 +344,11 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     iteration has settled, whether the stick and slip states settled too, the lagged normal
     force of the next pass with this pass's lag error, and which contacts' lagged force
     counts as settled. ``flips``, ``pinned``, ``calm`` (a 1-element count of the passes in
-    a row that changed no contact between open and closed) and ``lag_memory`` (:func:`next_lag`)
-    change in place; the iteration has
-    settled, its friction not, once ``calm`` reaches ``patience`` (0: never), whatever the
-    friction and lagged forces (:func:`dda.solvers.open_close.predictor_patience`).
+    a row that changed no contact between open and closed) and ``lag_memory``
+    (:func:`next_lag_force`, which takes ``relax_after`` and ``secant_from``) change in place;
+    the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
+    never), whatever the friction and lagged forces
+    (:func:`dda.solvers.open_close.predictor_patience`).
     """
     m = state.shape[0]
     new_state = np.empty(m, dtype=np.int8)

@@ -90,7 +90,8 @@ took 8.45-8.95 passes before and 6.45-6.92 with it, those at 2.5e-4 s 11.1-14.2 
 other contacts' forces, it saved about as much there but cost the stacks 2-4% more passes; from
 pass 3 the stacks' steps take 1-3% more passes, all among those that switch more than ten
 contacts. The fully implicit method's predictor keeps the plain rule: its Newton iterations
-judge the friction with the exact normal force, and the stacks' Newton passes grew by 2-4%.
+judge the friction with the exact normal force, and with the secant from pass 2 the stacks'
+Newton passes grew by 2-4% for no clear gain on the example.
 
 Legacy DDA also ends the iteration on changes too small to matter (``SETTLE_BAND``): a pass
 counts as settled when every contact whose state it changed moves less than 1% of the force
@@ -149,8 +150,7 @@ from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_so
 
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
            "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "LAG_SECANT_FROM", "LAG_PATIENCE",
-           "RETRY_PATIENCE",
-           "SETTLE_BAND", "predictor_patience", "round_off_gap", "next_lag"]
+           "RETRY_PATIENCE", "SETTLE_BAND", "predictor_patience", "round_off_gap", "next_lag"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
@@ -226,10 +226,10 @@ def open_close(problem: StepProblem, explicit: bool,
     gap_tol = round_off_gap(el)
     compiled = el.kernel_laws is not None
     history, t_stick, state, held = _start(el, explicit, gap_tol, compiled)
+    secant_from = LAG_SECANT_FROM if explicit else 0  # legacy DDA's secant lag only
     if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
-                                settle_friction, band, patience,
-                                LAG_SECANT_FROM if explicit else 0)
+                                settle_friction, band, patience, secant_from)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -238,7 +238,6 @@ def open_close(problem: StepProblem, explicit: bool,
     pinned = np.zeros(len(el), dtype=bool)  # held closed by the cycle rule
     lag_error = np.zeros(len(el))  # the last pass's normal force less its lagged one
     lag_memory = np.zeros((len(el), 3))  # the last pass's lagged and spring forces, closed
-    secant_from = LAG_SECANT_FROM if explicit else 0
     calm = 0  # passes in a row that changed no contact between open and closed
     for passes in range(1, problem.max_open_close + 1):
         # evaluated on every closed contact (used on the sliding ones): a law that judges
