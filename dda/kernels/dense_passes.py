@@ -110,7 +110,8 @@ def single_switch(state, proposed, gap):
 
 @njit(cache=True)
 def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
-                 patience, secant_from, block_k, block_f, d_known, n, block_base, block_step,
+                 patience, secant_from, remember_open, block_k, block_f, d_known, n,
+                 block_base, block_step,
                  free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows,
                  terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot,
                  reference, release, kind, mu_s, mu_d, cohesion, face, g_se, sliding, t_stick,
@@ -120,9 +121,11 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     Parameters
     ----------
     max_passes : passes allowed
-    settle_friction, band, rtol, floor, cycle_tension, relax_after, patience, secant_from :
+    settle_friction, band, rtol, floor, cycle_tension, relax_after, patience, secant_from,
+    remember_open :
         the iteration's rules (:func:`dda.kernels.open_close.pass_judge`; ``secant_from`` 0
-        for the fully implicit method's predictor)
+        and ``remember_open`` True for the fully implicit method's predictor, legacy DDA's
+        ``LAG_SECANT_FROM`` and False)
     block_k, block_f, d_known : the step's block matrices, forces and known increments
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
         the dense layout of :class:`dda.solvers.linear.SystemPattern`
@@ -199,7 +202,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
             state, held, judged, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
             calm, gap_tol, kn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj,
             bk, free, settle_friction, band, passes, rtol, floor, cycle_tension, relax_after,
-            patience, secant_from)
+            patience, secant_from, remember_open)
         if done:
             return CONVERGED, passes, d, new_state, gap.copy(), dgs.copy(), friction_settled
         changed = False
@@ -273,7 +276,7 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
                                                     g_se0, slip0, sliding0, t_n0, ps, length)
     state, held = first_states(state0, over, gap0, gap_tol, True)
     status, passes, d, state, gap, dgs, _ = dense_passes(
-        max_passes, True, band, rtol, floor, cycle_tension, relax_after, 0, secant_from,
+        max_passes, True, band, rtol, floor, cycle_tension, relax_after, 0, secant_from, False,
         block_k,
         block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
         side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,

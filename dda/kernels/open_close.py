@@ -38,6 +38,9 @@ __all__ = ["COULOMB", "TRANSITION", "TRANSITION_FACE", "round_off_gaps", "law_fo
 COULOMB, TRANSITION, TRANSITION_FACE = 0, 1, 2
 _OPEN, _STICK, _SLIP = 0, 1, 2
 
+#: the open <-> closed changes of a contact in the step before the lag memory takes it
+REMEMBER_FROM_FLIPS = 4
+
 
 def kernel_history(history, m):
     """The history arrays the kernels take: ``g_se``, ``slip``, ``sliding`` (zeros where
@@ -336,7 +339,7 @@ def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev,
 def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
                calm, gap_tol, pn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding,
                bj, bk, free, settle_friction, band, passes, rtol, floor, cycle_tension,
-               relax_after, patience, secant_from):
+               relax_after, patience, secant_from, remember_open):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
     Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
@@ -345,7 +348,8 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     force of the next pass with this pass's lag error, and which contacts' lagged force
     counts as settled. ``flips``, ``pinned``, ``calm`` (a 1-element count of the passes in
     a row that changed no contact between open and closed) and ``lag_memory``
-    (:func:`next_lag_force`, which takes ``relax_after`` and ``secant_from``) change in place;
+    (:func:`next_lag_force`, which takes ``relax_after``, ``secant_from`` and
+    ``remember_open``) change in place;
     the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
     never), whatever the friction and lagged forces
     (:func:`dda.solvers.open_close.predictor_patience`).
@@ -416,13 +420,13 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
         done = True
         friction_settled = False
     next_lag, error = next_lag_force(state, gap, pn, t_n, t_n_lag, lag_error, lag_memory,
-                                     passes, relax_after, secant_from)
+                                     passes, relax_after, secant_from, remember_open, flips)
     return new_state, t_n, done, friction_settled, next_lag, error, lag_ok
 
 
 @njit(cache=True)
 def next_lag_force(state, gap, pn, t_n, t_n_lag, lag_error, lag_memory, passes, relax_after,
-                   secant_from):
+                   secant_from, remember_open, flips):
     """The lagged normal force of the next pass and this pass's lag error ``N - N_lag``
     (:func:`dda.solvers.open_close.next_lag` is the same rule in numpy, the reference).
 
@@ -433,7 +437,11 @@ def next_lag_force(state, gap, pn, t_n, t_n_lag, lag_error, lag_memory, passes, 
     not cut off; primes: the last pass), capped at zero, when ``0.05 < w < 1``; from pass
     ``relax_after`` on, otherwise, the mean ``(N + N_lag) / 2``. ``lag_memory`` (m, 3) holds
     each contact's lagged force, spring force and closed flag (1.0) of the last pass, and is
-    updated in place.
+    updated in place. With ``remember_open`` (the fully implicit predictor) an open pass leaves
+    the memory as its last closed pass left it, and a contact open in this pass that closes
+    again, whose ``flips`` (open <-> closed changes in the step) reach ``REMEMBER_FROM_FLIPS``
+    and whose last closed pass's spring pulled, takes ``min((N_lag + p_n g) / 2, 0)`` of that
+    pass.
     """
     m = t_n.shape[0]
     next_lag = t_n.copy()
@@ -454,6 +462,13 @@ def next_lag_force(state, gap, pn, t_n, t_n_lag, lag_error, lag_memory, passes, 
                     secant = True
         if not secant and oscillates and passes >= relax_after:
             next_lag[i] = 0.5 * (t_n[i] + t_n_lag[i])
+        if remember_open and not closed:
+            # open in this pass: the memory keeps the contact's last closed pass; one that
+            # its own tension opened there and that closes again takes half of its lag back
+            if (t_n[i] < 0.0 and lag_memory[i, 2] != 0.0 and lag_memory[i, 1] > 0.0
+                    and flips[i] >= REMEMBER_FROM_FLIPS):
+                next_lag[i] = _np_min(0.5 * (lag_memory[i, 0] + lag_memory[i, 1]), 0.0)
+            continue
         lag_memory[i, 0] = t_n_lag[i]
         lag_memory[i, 1] = spring
         lag_memory[i, 2] = 1.0 if closed else 0.0

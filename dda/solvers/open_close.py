@@ -93,6 +93,20 @@ contacts. The fully implicit method's predictor keeps the plain rule: its Newton
 judge the friction with the exact normal force, and with the secant from pass 2 the stacks'
 Newton passes grew by 2-4% for no clear gain on the example.
 
+The fully implicit method's predictor remembers instead, through an open pass, the lag of a
+contact that has already gone from closed to open and back (``REMEMBER_FROM_FLIPS`` changes in
+the step): where its last closed pass's spring pulled (its own friction load opened it) and it
+penetrates again, its next lag is ``min((N_lag + p g) / 2, 0)`` of that closed pass, not the
+spring force of the penetration, which loads its friction up and opens it again, a cycle of
+two passes through an open one that the halving does not reach (it needs two closed passes).
+On ``examples/jointed_slope.py`` through 10 s of shaking (5e10 N/m) Newton's steps cut for
+OPEN-CLOSE went 99 -> 53 and its cut steps 144 in 6,974 -> 98 in 6,505. From the first cycle
+on it cut 78 steps but took the 60 x 60 stack from 5.80 to 6.63 passes a step (its bouncing
+contacts); from the second the stacks are unchanged. Legacy DDA keeps the plain rule: the
+memory lets its steps settle into the moving base's see-saw, where a held stick spring rings at
+two steps a period (``benchmarks/README.md``, issue 19's twenty-first and twenty-second parts),
+and its errors there went 12.8% -> 22.3% (2e9 N/m) and 15.9% -> 17.9% (2e10) at dt 1e-2.
+
 Legacy DDA also ends the iteration on changes too small to matter (``SETTLE_BAND``): a pass
 counts as settled when every contact whose state it changed moves less than 1% of the force
 that measures it (the largest normal force on its lighter loaded block; blocks whose motion is
@@ -135,6 +149,7 @@ from dda.contact.tangent import SPRING_TERMS
 from dda.kernels.dense_passes import CONVERGED, NOT_SETTLED, SINGULAR, dense_passes
 from dda.kernels.dense_passes import single_switch as _single_switch
 from dda.kernels.open_close import (
+    REMEMBER_FROM_FLIPS,
     as_float64,
     kernel_history,
     kernel_history_dict,
@@ -227,9 +242,10 @@ def open_close(problem: StepProblem, explicit: bool,
     compiled = el.kernel_laws is not None
     history, t_stick, state, held = _start(el, explicit, gap_tol, compiled)
     secant_from = LAG_SECANT_FROM if explicit else 0  # legacy DDA's secant lag only
+    remember_open = not explicit  # the predictor's lag memory only
     if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
-                                settle_friction, band, patience, secant_from)
+                                settle_friction, band, patience, secant_from, remember_open)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -280,7 +296,8 @@ def open_close(problem: StepProblem, explicit: bool,
             new_state = _single_switch(state, new_state, judged)
         seen.add(new_state.tobytes())
         t_n_lag, lag_error = next_lag(state, judged, el.judge_stiffness, t_n, t_n_lag,
-                                      lag_error, lag_memory, passes, secant_from)
+                                      lag_error, lag_memory, passes, secant_from,
+                                      remember_open, flips)
         state, dgs_prev = new_state, dgs
     return OpenCloseResult(False, passes, f"OPEN-CLOSE did not settle in {passes} passes", d)
 
@@ -300,7 +317,7 @@ def _solve_pass(problem, k, f):
 
 
 def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle_friction,
-                     band, patience, secant_from) -> OpenCloseResult:
+                     band, patience, secant_from, remember_open) -> OpenCloseResult:
     """The iteration of :func:`open_close` with the built-in laws' compiled passes
     (:mod:`dda.kernels.open_close`): the same rules in the same order, the same results."""
     m = len(el)
@@ -309,7 +326,8 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     g_se, _, sliding = kernel_history(history, m)
     if dense_eligible(problem):
         return _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
-                      patience, secant_from, (g_se, sliding, as_float64(t_stick)))
+                      patience, secant_from, remember_open,
+                      (g_se, sliding, as_float64(t_stick)))
     pn, kn, ps, length, gap0, e_row, i_row, t_stick = (
         np.ascontiguousarray(a, dtype=f64) for a in (
             el.normal_penalty, el.judge_stiffness, el.shear_penalty, el.length, el.gap0,
@@ -340,7 +358,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
             new_state, t_n, done, friction_settled, next_lag, lag_error, lag_ok = pass_judge(
                 state, held, judged, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips,
                 pinned, calm, gap_tol, kn, ps, length, *laws, g_se, sliding, bj, bk, free,
-                settle_friction, float(band), passes, *rules, secant_from)
+                settle_friction, float(band), passes, *rules, secant_from, remember_open)
         if PASS_LOG is not None:
             PASS_LOG.append(_why(state, new_state, lag_ok))
         if done:
@@ -427,7 +445,7 @@ def dense_failure(status: int, passes: int) -> str:
 
 
 def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, patience,
-           secant_from, start) -> OpenCloseResult:
+           secant_from, remember_open, start) -> OpenCloseResult:
     """:func:`_compiled_passes` on a dense system: every pass in one kernel call
     (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
     round-off). ``start`` is the step's pulled-back ``g_se``, ``sliding`` and stick forces.
@@ -435,7 +453,8 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, pa
     with section("solve"):
         status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
             problem.max_open_close, bool(settle_friction), float(band), *pass_rules(patience),
-            secant_from, *dense_arguments(problem), *start, np.asarray(state, dtype=np.int8),
+            secant_from, remember_open, *dense_arguments(problem), *start,
+            np.asarray(state, dtype=np.int8),
             np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
     count_solve(passes)
     if status == CONVERGED:
@@ -512,7 +531,7 @@ def _negligible_changes(el, state, new_state, gap, dgs, history, t_n, t_slip,
 
 
 def next_lag(state, gap, stiffness, t_n, t_n_lag, lag_error, lag_memory, passes,
-             secant_from=0):
+             secant_from=0, remember_open=False, flips=None):
     """The lagged normal force of the next pass, and this pass's lag error ``N - N_lag``.
 
     The pass's own force ``N``; where the error changed sign since the last pass (an
@@ -526,7 +545,11 @@ def next_lag(state, gap, stiffness, t_n, t_n_lag, lag_error, lag_memory, passes,
     linear map ``w = 1 / (1 + b)``, and the step lands on its fixed point ``a / (1 + b)``);
     from pass ``LAG_RELAX_AFTER`` on, otherwise, the mean ``(N + N_lag) / 2``. ``lag_memory``
     (m, 3) holds each contact's lagged force, spring force and closed flag (1.0) of the last
-    pass and is updated in place. The compiled passes' rule is
+    pass and is updated in place; with ``remember_open`` (the fully implicit predictor) an
+    open pass leaves it, and a contact that closes again after ``REMEMBER_FROM_FLIPS`` changes
+    between open and closed (``flips``), its last closed pass's spring pulling, takes
+    ``min((N_lag + p g) / 2, 0)`` of that pass (the module docstring). The compiled passes'
+    rule is
     :func:`dda.kernels.open_close.next_lag_force`, the same arithmetic.
     """
     error = t_n - t_n_lag
@@ -545,9 +568,17 @@ def next_lag(state, gap, stiffness, t_n, t_n_lag, lag_error, lag_memory, passes,
     if passes >= LAG_RELAX_AFTER:
         relax = oscillates & ~secant
         out[relax] = (0.5 * (t_n + t_n_lag))[relax]
-    lag_memory[:, 0] = t_n_lag
-    lag_memory[:, 1] = spring
-    lag_memory[:, 2] = np.where(closed, 1.0, 0.0)
+    keep = np.zeros(len(t_n), dtype=bool)
+    if remember_open:
+        # open in this pass: the memory keeps the contact's last closed pass; one that its
+        # own tension opened there and that closes again takes half of its lag back
+        keep = ~closed
+        back = (keep & (t_n < 0.0) & (lag_memory[:, 2] != 0.0) & (lag_memory[:, 1] > 0.0)
+                & (flips >= REMEMBER_FROM_FLIPS))
+        out[back] = np.minimum(0.5 * (lag_memory[:, 0] + lag_memory[:, 1]), 0.0)[back]
+    lag_memory[~keep, 0] = t_n_lag[~keep]
+    lag_memory[~keep, 1] = spring[~keep]
+    lag_memory[~keep, 2] = np.where(closed, 1.0, 0.0)[~keep]
     return out, error
 
 
