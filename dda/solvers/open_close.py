@@ -95,10 +95,13 @@ Newton passes grew by 2-4% for no clear gain on the example.
 
 The fully implicit method's predictor remembers instead, through an open pass, the lag of a
 contact that has already gone from closed to open and back (``REMEMBER_FROM_FLIPS`` changes in
-the step): where its last closed pass's spring pulled (its own friction load opened it) and it
-penetrates again, its next lag is ``min((N_lag + p g) / 2, 0)`` of that closed pass, not the
-spring force of the penetration, which loads its friction up and opens it again, a cycle of
-two passes through an open one that the halving does not reach (it needs two closed passes).
+the step): where its last closed pass's spring pulled (that pass's loads opened it, on the
+cut slope's faces its own friction load) and it penetrates again, its next lag is
+``min((N_lag + p g) / 2, 0)`` of that closed pass, not the spring force of the penetration,
+which loads its friction up and opens it again, a cycle of two passes through an open one that
+the halving does not reach (it needs two closed passes). Only a contact that closes sliding
+uses it (a sticking one's friction takes the pass's own force); restricted to contacts that
+were sliding in that closed pass as well, it lost its gain below (135 cut steps).
 On ``examples/jointed_slope.py`` through 10 s of shaking (5e10 N/m) Newton's steps cut for
 OPEN-CLOSE went 99 -> 53 and its cut steps 144 in 6,974 -> 98 in 6,505. From the first cycle
 on it cut 78 steps but took the 60 x 60 stack from 5.80 to 6.63 passes a step (its bouncing
