@@ -571,17 +571,14 @@ def next_lag(state, gap, stiffness, t_n, t_n_lag, lag_error, lag_memory, passes,
     if passes >= LAG_RELAX_AFTER:
         relax = oscillates & ~secant
         out[relax] = (0.5 * (t_n + t_n_lag))[relax]
-    keep = np.zeros(len(t_n), dtype=bool)
+    write = closed | (not remember_open)
     if remember_open:
         # open in this pass: the memory keeps the contact's last closed pass; one that its
         # own tension opened there and that closes again takes half of its lag back
-        keep = ~closed
-        back = (keep & (t_n < 0.0) & (lag_memory[:, 2] != 0.0) & (lag_memory[:, 1] > 0.0)
+        back = (~closed & (t_n < 0.0) & (lag_memory[:, 2] != 0.0) & (lag_memory[:, 1] > 0.0)
                 & (flips >= REMEMBER_FROM_FLIPS))
         out[back] = np.minimum(0.5 * (lag_memory[:, 0] + lag_memory[:, 1]), 0.0)[back]
-    lag_memory[~keep, 0] = t_n_lag[~keep]
-    lag_memory[~keep, 1] = spring[~keep]
-    lag_memory[~keep, 2] = np.where(closed, 1.0, 0.0)[~keep]
+    lag_memory[write] = np.column_stack((t_n_lag, spring, closed.astype(float)))[write]
     return out, error
 
 
