@@ -383,7 +383,8 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
             int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
             float(newton_module.PREDICTOR_CONTRACTION), float(getattr(solver, "tol", 1.0)),
             newton_module.ROUND_OFF,
-            newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH, rigid, faces,
+            newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH,
+            bool(newton_module.REVERSED_STICK), rigid, faces,
             _FACE_COS, bool(newton_module.NOISE_FLOOR))
     if status == FALLBACK:
         return None

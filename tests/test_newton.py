@@ -75,25 +75,34 @@ def test_newton_halves_a_step_that_cycles_across_a_kink():
     sliding contacts whose trial force changed sign at every full Newton step: |R| stayed at
     30 N through the predictor's iterations and cycled between 450 and 560 N (sliding, open,
     sliding) through all 25 of the next, and the step was cut. Halving a step that brings
-    back the contact pattern of two steps before converges it. (Without the impact dashpot,
+    back the contact pattern of two steps before converges it; so does the step on a turned
+    contact's stick branch (REVERSED_STICK) without halving. (Without the impact dashpot,
     as measured: with it the stack takes another path and that step has no such cycle.)"""
     import dda.solvers.newton as newton
     from dda.solvers import NewtonRaphson
     from tests.conftest import stack_scene
 
-    sim = dda.Simulation(stack_scene(30, restitution=1.0), dt=1e-3, solver=NewtonRaphson(),
-                         max_open_close=30)
-    sim.run(0.075, progress=False)
-    problem = capture_step_problem(sim, 1e-3)
-    sol = NewtonRaphson().solve_step(problem)
-    assert sol.converged, sol.reason
-    old = newton.LINE_SEARCH_HALVINGS
-    newton.LINE_SEARCH_HALVINGS = 0
+    rule = newton.REVERSED_STICK
+    newton.REVERSED_STICK = False  # the run to the step as measured
     try:
-        without = NewtonRaphson().solve_step(problem)
+        sim = dda.Simulation(stack_scene(30, restitution=1.0), dt=1e-3,
+                             solver=NewtonRaphson(), max_open_close=30)
+        sim.run(0.075, progress=False)
+        problem = capture_step_problem(sim, 1e-3)
+        sol = NewtonRaphson().solve_step(problem)
+        assert sol.converged, sol.reason
+        old = newton.LINE_SEARCH_HALVINGS
+        newton.LINE_SEARCH_HALVINGS = 0
+        try:
+            without = NewtonRaphson().solve_step(problem)
+            newton.REVERSED_STICK = True
+            branch = NewtonRaphson().solve_step(problem)
+        finally:
+            newton.LINE_SEARCH_HALVINGS = old
     finally:
-        newton.LINE_SEARCH_HALVINGS = old
+        newton.REVERSED_STICK = rule
     assert not without.converged and "did not converge in 25" in without.reason
+    assert branch.converged, branch.reason
 
 
 def test_a_cycle_is_a_pattern_of_two_to_cycle_length_iterates_back():

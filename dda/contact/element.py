@@ -209,6 +209,24 @@ class ContactResponse:
     def stiffness(self) -> PairStiffness:
         return self.tangent() if callable(self.tangent) else self.tangent
 
+    #: a callable ``stick -> (PairStiffness, residual rows)``: the contacts of the mask
+    #: ``stick`` on their stick branch (:meth:`stick_branch`), None where not given
+    stick: object = None
+
+    def stick_branch(self, stick: np.ndarray) -> tuple[PairStiffness, np.ndarray]:
+        """The tangent and the residual rows with the closed contacts of the mask ``stick``
+        (m,) on the elastic branch of their law, whatever the return map gave them:
+
+            t_s = p_s (g_se + dg_s),   dt_s/dg_s = p_s,   dt_s/dg_n = 0
+
+        (their law's :meth:`~dda.contact.FrictionLaw.stick`, from the committed history);
+        their normal force, the other contacts and the geometric terms are the response's.
+        A Newton step from them is the step of the branch on which those contacts stick
+        (:data:`dda.solvers.newton.REVERSED_STICK`)."""
+        if self.stick is None:
+            raise TypeError("ContactResponse: this response has no stick branch")
+        return self.stick(stick)
+
 
 class ContactElement:
     """Vertex-edge penalty contacts of one step.
@@ -561,9 +579,21 @@ class ContactElement:
             residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
             spring = self.spring_force(closed, kin.gap, t_n)
 
-        def tangent():
+        def tangent(stick=None):
+            k_ss, k_sn = kss, ksn
+            if stick is not None:  # these contacts on their stick branch
+                k_ss = np.where(stick, ps, kss)
+                k_sn = np.where(stick, 0.0, ksn)
             with section("contact_element"):
-                return consistent_tangent(kin, self.maps, xi0, np.where(closed, kn, 0.0), kss,
-                                          ksn, t_n, t_s, closed)
+                return consistent_tangent(kin, self.maps, xi0, np.where(closed, kn, 0.0), k_ss,
+                                          k_sn, t_n, t_s, closed)
 
-        return ContactResponse(closed, slipping, spring, t_s, history, residual, tangent, t_n)
+        def stick_branch(stick):
+            stick = stick & closed
+            t_stick = self.laws.stick(self.contacts.history, kin.shear - self.shear0, ps,
+                                      stick)[0]
+            rows = residual + np.where(stick, t_stick - t_s, 0.0)[:, None] * kin.i_row
+            return tangent(stick), rows
+
+        return ContactResponse(closed, slipping, spring, t_s, history, residual, tangent, t_n,
+                               stick_branch)

@@ -136,7 +136,8 @@ def stalled(norm, last, before, contraction):
 
 
 @njit(cache=True)
-def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, contraction,
+def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, reversed_stick,
+                 contraction,
                  block_k, block_f, free, rigid, n, block_base, block_step, free_blocks,
                  pair_base, pair_step, side_row, side_block, keep, reduced, bj, bk, p1, p2, p3,
                  a1, a2, a3, xi0, shear0, release, has_dashpot, kn, pn, ps, length, kind, mu_s,
@@ -147,9 +148,9 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, co
     Parameters
     ----------
     d : (n_blocks, 6) the first iterate (the known blocks' rows are their increments)
-    max_iter, tol, round_off, halvings_allowed, cycle_length : the iteration's rules
-        (:mod:`dda.solvers.newton`: ``max_iter``, ``tol``, ``ROUND_OFF``,
-        ``LINE_SEARCH_HALVINGS``, ``CYCLE_LENGTH``)
+    max_iter, tol, round_off, halvings_allowed, cycle_length, reversed_stick : the
+        iteration's rules (:mod:`dda.solvers.newton`: ``max_iter``, ``tol``, ``ROUND_OFF``,
+        ``LINE_SEARCH_HALVINGS``, ``CYCLE_LENGTH``, ``REVERSED_STICK``)
     contraction : when > 0, the iteration gives up (STALLED) at an iterate that has not
         converged when neither it nor the accepted iterate before brought |R| below this
         fraction of the one before it (:meth:`dda.solvers.NewtonRaphson.iterate`)
@@ -248,6 +249,16 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, co
         if it == max_iter:
             status = NOT_CONVERGED
             break
+        if reversed_stick and n_norms >= 2:
+            # sliding the other way than at the iterate before: the step of its stick branch
+            for c in range(m):
+                now = patterns[n_norms - 1, c]
+                if (now == 2 or now == -2) and now == -patterns[n_norms - 2, c]:
+                    kss[c] = ps[c]
+                    ksn[c] = 0.0
+                    change = ps[c] * (g_se[c] + (shear[c] - shear0[c])) - t_s[c]
+                    for j in range(residual.shape[1]):
+                        residual[c, j] = residual[c, j] + change * i_row[c, j]
         rows = tangent_rows(a1, a2, a3, normal, tau, xi, xi0, gap, shear, length_t, e_row,
                             i_row, kss, ksn, t_n, t_s, closed)
         for c in range(m):
@@ -280,7 +291,8 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, co
 def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patience,
                       retry_patience, unsettled, max_iter, predictor_iterations,
                       predictor_contraction, tol, round_off,
-                      halvings_allowed, cycle_length, block_k, block_f, d_known, n, block_base,
+                      halvings_allowed, cycle_length, reversed_stick, block_k, block_f, d_known,
+                      n, block_base,
                       block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
                       reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length,
                       has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,
@@ -345,7 +357,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
         contraction = predictor_contraction if looser else 0.0
         (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
          sliding) = dense_newton(d, limit, tol, round_off, halvings_allowed, cycle_length,
-                                 contraction,
+                                 reversed_stick, contraction,
                                  block_k, block_f, free, rigid, n, block_base, block_step,
                                  free_blocks, pair_base, pair_step, side_row, side_block, keep,
                                  reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0, shear0, release,

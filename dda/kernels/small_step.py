@@ -61,7 +61,8 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
                  law, init, block_k, block_f, d_known, n, block_base, block_step, free_blocks,
                  pair_base, pair_step, side_row, side_block, keep, reduced, terms, gap_rel,
                  gap_abs, max_passes, band, rules, unsettled, max_iter, predictor_iterations,
-                 predictor_contraction, tol, round_off, halvings, cycle_length, rigid, faces,
+                 predictor_contraction, tol, round_off, halvings, cycle_length, reversed_stick,
+                 rigid, faces,
                  face_cos, noise_floor):
     """One step's contacts, solve, moves and guard (module docstring).
 
@@ -196,7 +197,8 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
          g_se_out, slip_out, sliding_out, solves) = newton_dense_step(
             max_passes, rtol, floor, cycle_tension, relax_after, patience, retry_patience,
             unsettled, max_iter, predictor_iterations, predictor_contraction, tol, round_off,
-            halvings, cycle_length, block_k, block_f, d_known, n, block_base, block_step,
+            halvings, cycle_length, reversed_stick, block_k, block_f, d_known, n, block_base,
+            block_step,
             free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms,
             bj, bk, free, e_row, i_row, gap, pn, ps_step, judge, length, has_dashpot, dashpot,
             reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se, slip, sliding,

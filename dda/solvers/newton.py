@@ -19,7 +19,9 @@ The return map has kinks (a contact that opens, a sliding contact whose trial fo
 sign), and full Newton steps can jump back and forth across one for ever. A step that brings
 the contacts back to the states (and sliding directions) of two to ``CYCLE_LENGTH`` steps
 before without halving the residual since then is halved, up to ``LINE_SEARCH_HALVINGS``
-times, before the next step is taken.
+times, before the next step is taken. A contact that slides the other way than at the iterate
+before takes the next step on its stick branch (``REVERSED_STICK``): a sliding contact's
+tangent has no shear stiffness, and full steps jumped across a narrow stick band for ever.
 
 Later iterations whose contacts keep their states (but for ``NEAR_SWITCHES``) solve by GMRES
 preconditioned with the last factorization of the tangent
@@ -113,6 +115,20 @@ PREDICTOR_LOW_RANK = True
 # factors' refinement stops there (dda.solvers.sparse_factor) instead of at 1e-12 of the
 # solution. 0 (or None): every solve refined in full
 INEXACT_FRACTION = 0.1
+# a contact that slides at an iterate in the direction opposite to the iterate before's takes
+# the next Newton step on its stick branch: its law's elastic force p_s (g_se + dg_s) and
+# tangent (k_ss = p_s, k_sn = 0) in place of the return map's. Sliding, its tangent has no
+# shear stiffness, so a full step moves its shear gap as if nothing held it; where the step's
+# answer sticks with a shear force near zero, inside a band 2 mu t_n / p_s wide (2e-8 m for
+# 700 N at 5e10 N/m), the steps jumped across the band from one direction to the other for
+# the whole budget (the cut slope of examples/jointed_slope.py at 5e10 N/m: |R| 28, 33, 28,
+# ... N, 2e-6 of the forces, and a cut step). The branch's step lands on the answer when it
+# sticks, and one iterate further when the contact does slide the other way. Over 10 s of the
+# cut slope's shaking the steps cut for Newton fell from 45 to 5 (all cuts 98 -> 89); on the
+# 60 x 60 stack of benchmarks/stacks.py 5.80 -> 5.00 passes and 6.63 -> 5.90 factorizations
+# a step. Waiting for a second turn: 27 cuts for Newton and 5.43 passes
+# (benchmarks/README.md, issue 19's twenty-third part)
+REVERSED_STICK = True
 
 
 class NewtonRaphson(NonlinearSolver):
@@ -266,6 +282,11 @@ class NewtonRaphson(NonlinearSolver):
                 return StepSolution(None, None, False, 0, it, (
                     f"Newton-Raphson did not converge in {max_iter} iterations "
                     f"(|R| = {norm:.3g}, {norm / scale:.3g} of the forces)"), norms)
+            # a contact whose sliding direction turned takes this step on its stick branch
+            # (REVERSED_STICK)
+            turned = _reversed(patterns) if REVERSED_STICK else None
+            if turned is not None:
+                states = np.where(turned, STICK, states)
             # a tangent whose contacts are in the states of the one factorized last, but for
             # a few, differs from it by little (the geometric terms, the slip coupling's
             # direction, a low-rank change): GMRES with that factorization solves it in a
@@ -274,7 +295,12 @@ class NewtonRaphson(NonlinearSolver):
                     and np.count_nonzero(states != factored) <= NEAR_SWITCHES)
             done = factor.factorizations if factor is not None else 0
             try:
-                tangent = resp.stiffness
+                if turned is None:
+                    tangent = resp.stiffness
+                else:
+                    tangent, pair_r = resp.stick_branch(turned)
+                    if problem.bolts is not None:
+                        pair_r = np.concatenate([pair_r, problem.bolts.residual(d)])
                 if problem.bolts is not None:
                     tangent = problem.with_bolts(tangent, resp.residual)[0]
                 step = assemble_and_solve(problem.block_k, -block_r, free,
@@ -307,7 +333,8 @@ class NewtonRaphson(NonlinearSolver):
             (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
              sliding) = dense_newton(
                 as_float64(d), max_iter, float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
-                CYCLE_LENGTH, float(contraction), as_float64(problem.block_k),
+                CYCLE_LENGTH, bool(REVERSED_STICK), float(contraction),
+                as_float64(problem.block_k),
                 as_float64(problem.block_f), np.asarray(problem.free, dtype=np.bool_),
                 np.asarray(rigid, dtype=np.bool_),
                 *dense_layout(pattern), np.asarray(el.bj, dtype=np.int64),
@@ -336,7 +363,8 @@ class NewtonRaphson(NonlinearSolver):
                 problem.max_open_close, *pass_rules(), predictor_patience(False, True),
                 self.unsettled_predictor, self.max_iter, PREDICTOR_ITERATIONS,
                 float(PREDICTOR_CONTRACTION), float(self.tol), ROUND_OFF, LINE_SEARCH_HALVINGS,
-                CYCLE_LENGTH, *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
+                CYCLE_LENGTH, bool(REVERSED_STICK), *dense_arguments(problem),
+                np.asarray(c.state, dtype=np.int8),
                 *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el),
                 np.asarray(rigid, dtype=np.bool_), *(as_float64(a) for a in (
                     g.p1, g.p2, g.p3, *el.maps, c.xi0, el.shear0)), bool(NOISE_FLOOR))
@@ -421,6 +449,16 @@ def _norm(a: np.ndarray) -> float:
     flattened array's dot product with itself), without its dispatch (4 calls an iterate)."""
     v = a.ravel(order="K")
     return math.sqrt(v.dot(v))
+
+
+def _reversed(patterns):
+    """(m,) the contacts sliding at the last accepted iterate in the direction opposite to
+    the iterate before's, or None when there is none (``patterns``: :meth:`iterate`'s)."""
+    if len(patterns) < 2:
+        return None
+    now = patterns[-1]
+    turned = (np.abs(now) == 2) & (now == -patterns[-2])
+    return turned if turned.any() else None
 
 
 def _seen_at(pattern, patterns):
