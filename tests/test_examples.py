@@ -80,6 +80,27 @@ def test_jointed_slope_example(tmp_path, capsys):
     assert np.all(np.isfinite(moved)) and moved.max() < 0.05
 
 
+def test_jointed_slope_other_cuts(tmp_path, capsys):
+    """``--seed`` draws the cross joints' traces again (benchmarks/cut_rate.py): another set
+    of blocks that covers the same rock mass, and it runs."""
+    demo = load("jointed_slope")
+    from dda.geometry import polygon_integrals
+
+    counts = {}
+    for seed in (0, 1):
+        scene, _, blocks = demo.build_scene(seed=seed)
+        x, offsets = scene.vertex_arrays()
+        area = polygon_integrals(x, offsets).area[[b.index for b in blocks]].sum()
+        assert 0.98 * 680.0 < area <= 680.0 * (1 + 1e-9)
+        counts[seed] = (len(blocks), round(float(area), 6))
+    assert counts[0] != counts[1]  # a different cut, not the same one again
+    _, blocks, moved = demo.main(["--out", str(tmp_path), "--duration", "0.004",
+                                  "--seed", "1"])
+    assert f"{counts[1][0]} blocks cut from the slope" in capsys.readouterr().out
+    assert len(blocks) == counts[1][0]
+    assert np.all(np.isfinite(moved)) and moved.max() < 0.05
+
+
 def test_user_friction_law(capsys):
     """docs/friction_laws.md's example at its default length: the user's law passes the check,
     both laws under both solvers land within 1% of the rigid-block formula, and the scene file
