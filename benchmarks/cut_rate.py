@@ -16,7 +16,8 @@ run and pooled over the cuts:
 - OPEN-CLOSE passes a step, CPU seconds, and the face blocks' median motion (mm).
 
 Each run is its own process (``--workers`` at a time). Writes ``benchmarks/results/cut_rate.md``
-(another path with ``--out``). About 35 minutes on two cores with the defaults.
+(another path with ``--out``). About 30 minutes on two cores with the defaults
+(``--auto --seconds 3``: about 20).
 
 ``--auto`` runs the same cuts with the penalty and dt chosen by the simulation
 (``JointMaterial("auto", "auto", ...)``, ``dt="auto"``: 2e10 N/m at about 2.4e-4 s here), whose
