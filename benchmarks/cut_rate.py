@@ -77,8 +77,7 @@ def one_run(solver: str, seed: int, seconds: float, auto: bool = False) -> dict:
     cuts = result.stats.cuts
     early = [t < EARLY for t, _, _ in cuts]
     times = np.asarray(result.stats["time"])
-    base_u = result.displacement(base)[-1]
-    moved = [np.hypot(*(result.displacement(b)[-1] - base_u)) for b in face]
+    moved = js.face_motion(result, base, face)
     return dict(solver=solver, seed=seed, blocks=len(blocks), seconds=seconds, dt=sim.dt,
                 penalty=float(sim.model.joints.normal_penalty[0]),
                 steps=int(len(times)), cuts=len(cuts), tries=int(sum(tries)),

@@ -111,6 +111,13 @@ def build_scene(min_size: float = 0.10, seed: int = 0, mass=MASS, acceleration=s
     return scene, base, blocks
 
 
+def face_motion(result, base, face) -> np.ndarray:
+    """How far each of the ``face`` blocks ended from where it started, relative to the
+    ``base`` (m)."""
+    base_u = result.displacement(base)[-1]
+    return np.array([np.hypot(*(result.displacement(b)[-1] - base_u)) for b in face])
+
+
 def face_blocks(scene, blocks, depth: float = 2.0, mass=MASS):
     """The blocks within ``depth`` of the slope face (the ones that can fall)."""
     (x0, y0), (x1, y1) = mass[0], mass[3]
@@ -148,8 +155,7 @@ def main(argv=None):
         print(sim.choices)
     writer = dda.io.VTUWriter(out / "slope", interval=0.05)  # a frame every 0.05 s
     result = sim.run(args.duration, output=writer, progress=sys.stderr.isatty())
-    base_u = result.displacement(base)[-1]
-    moved = np.array([np.hypot(*(result.displacement(b)[-1] - base_u)) for b in face])
+    moved = face_motion(result, base, face)
     print(f"after {args.duration:g} s the face blocks moved {1e3 * np.median(moved):.2f} mm "
           f"(median) and {1e3 * moved.max():.2f} mm (most) against the base")
     print(f"wrote {len(writer.files)} VTU files and {writer.pvd_path}")
