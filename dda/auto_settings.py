@@ -22,9 +22,30 @@ says what it chose and why. The rule, and the measurements it comes from
    example's whole 16 s (2 s a level, the shaking's 99% frequency 2.3 Hz) Newton's gap is
    0.031% at N = 300 (11 s of CPU; the paper's 10 GN/m and 10 MN/m at dt 1e-3: 0.69%, 16 s)
    and legacy DDA's 0.76 / 1.21 / 0.68 / 0.85 / 0.51% at N = 500 / 700 / 900 / 1000 / 1200
-   (22 s at 700; the paper's settings: 7.7%, 14 s): legacy DDA's onset error does not fall
-   steadily with dt, and the rule does not promise it 1% there. Without
-   shaking (and as a cap with it) a
+   (22 s at 700; the paper's settings: 7.7%, 14 s). Those were measured before the joints'
+   impact dashpot; with it, legacy DDA's 16 s erred 1.71 / 1.14-1.53 / 1.39 / 0.98 / 0.89 /
+   0.66 / 0.54 / 0.50% at N = 600 / 700 / 800 / 1000 / 1200 / 1500 / 1800 / 2000 (1.14 and
+   1.53% at dt 6.211e-4 and 6.210e-4 s: where in its step an onset falls moves the error by a
+   third): first order in dt, error times N about 1,000%.
+
+   Legacy DDA's error there is the transition law's drop from static to dynamic friction at
+   the onset of slip: a contact that starts the step sticking sticks for the whole step, so
+   its slip begins up to a step late, and where the strength drops at onset the block was
+   meant to accelerate at once (by the drop, ``g (mu_s - mu_d) cos(dip)`` on a plane) and
+   loses that speed times the delay for the whole slip that follows. Without a drop the
+   force grows from zero and the delay costs little (the moving base's Coulomb joint: 0.04%
+   at N = 350). So legacy DDA takes at least ``auto_steps_per_drop`` (5,500) times the
+   largest drop ``1 - mu_d / mu_s`` of the scene's laws
+   (:meth:`dda.contact.FrictionLaw.onset_drop`) steps a period. Error times N on the 16 s
+   slope (phi_s 40.5 degrees): about 550% at phi_d 36 (a drop of 0.149; N = 700 / 1000 /
+   1500: 0.79 / 0.55 / 0.59%), 1,000% at 31.6 (0.280) and 800% at 25 (0.454, which reaches
+   the stopper sooner: N = 1000 / 2500, 0.82 / 0.32%); on the 4 s slope 650% (0.280; N = 700
+   / 1000 / 1540 / 2000: 0.97 / 0.59 / 0.47 / 0.33%). The rule's 820 / 1,540 / 2,500 steps
+   put those at 0.3-0.7%. The fully implicit method's return map lets a contact slide in the
+   very step whose end finds it over its strength, and takes no such rule
+   (``auto_steps_per_drop`` 0).
+
+   Without shaking (and as a cap with it) a
    block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /
    perimeter`` in one step under gravity and the shaking's peak: ``dt = sqrt(2 TARGET_DEPTH
    h / (g + a_max))``.
@@ -81,7 +102,7 @@ import numpy as np
 
 from dda.penalty_advice import TARGET_DEPTH
 
-__all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose",
+__all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose", "onset_drop",
            "shaking_frequency"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block
@@ -186,6 +207,31 @@ def _block_loads(model, a_max: float) -> tuple[np.ndarray, np.ndarray]:
     return 0.5 * load * factor, carries
 
 
+def onset_drop(model) -> tuple[float, object]:
+    """The largest strength drop at the onset of slip among the scene's friction laws
+    (:meth:`dda.contact.FrictionLaw.onset_drop`), and its law (None: no law drops)."""
+    drop, which = 0.0, None
+    for law in model.joints.laws:
+        value = float(getattr(law, "onset_drop", lambda: 0.0)())
+        if value > drop:
+            drop, which = value, law
+    return drop, which
+
+
+def _steps_per_period(model, solver, steps: int) -> tuple[int, str]:
+    """The steps a period of the shaking (rule 1) and why: the solver's
+    ``auto_steps_per_period``, or more where its onset of slip lags and a law's strength drops
+    at onset (``auto_steps_per_drop`` times the drop)."""
+    per_drop = float(getattr(solver, "auto_steps_per_drop", 0.0))
+    drop, law = onset_drop(model)
+    need = int(np.ceil(per_drop * drop))
+    if need <= steps:
+        return steps, "the solver's auto_steps_per_period"
+    return need, (f"the solver finds the onset of slip up to a step late, and {law!r} loses "
+                  f"{100 * drop:.3g}% of its strength there: its auto_steps_per_drop {per_drop:g} "
+                  f"x {drop:.3g}, more than its auto_steps_per_period {steps}")
+
+
 def choose(model, solver, dt: float | None, shakes=(), duration: float | None = None,
            auto_penalty: bool = True) -> AutoChoice:
     """Choose dt (when ``dt`` is None) and the penalty (module docstring) for ``model``.
@@ -218,10 +264,11 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
         drive = g + a_max
         dt_move = np.sqrt(2.0 * TARGET_DEPTH * h_min / drive) if drive > 0.0 else np.inf
         if f is not None:
+            steps, why = _steps_per_period(model, solver, steps)
             dt_shake = 1.0 / (steps * f)
-            lines.append(f"dt: {steps} steps (the solver's auto_steps_per_period) per period "
-                         f"of the shaking's {f:.3g} Hz (below which {100 * ENERGY_SHARE:g}% of "
-                         f"its spectral energy lies): {dt_shake:.3g} s")
+            lines.append(f"dt: {steps} steps ({why}) per period of the shaking's {f:.3g} Hz "
+                         f"(below which {100 * ENERGY_SHARE:g}% of its spectral energy lies): "
+                         f"{dt_shake:.3g} s")
         else:
             dt_shake = np.inf
         if dt_move < dt_shake:

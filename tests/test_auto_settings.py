@@ -117,6 +117,36 @@ def test_dt_resolves_the_shaking_by_the_solver(solver, steps):
     assert f"{steps} steps" in sim.choices and "5 Hz" in sim.choices
 
 
+def test_the_laws_say_how_much_strength_they_lose_at_the_onset_of_slip():
+    from dda.contact import BartonBandis, FrictionLaw, StaticDynamicTransition
+
+    assert CoulombSingle(phi=35.0).onset_drop() == 0.0
+    assert BartonBandis(jrc=10.0, jcs=50e6, phi_r=30.0).onset_drop() == 0.0
+    law = StaticDynamicTransition(40.5, 31.6)
+    assert law.onset_drop() == pytest.approx(
+        1.0 - np.tan(np.radians(31.6)) / np.tan(np.radians(40.5)), rel=1e-12)
+    assert StaticDynamicTransition(30.0, 30.0).onset_drop() == 0.0
+    assert StaticDynamicTransition(0.0, 0.0).onset_drop() == 0.0
+    assert FrictionLaw.onset_drop(law) == 0.0  # a law of one's own: no drop unless it says
+
+
+@pytest.mark.parametrize("solver, phi_dynamic, steps", [
+    (LegacyPullBack(), 20.0, int(np.ceil(5500.0 * (1.0 - np.tan(np.radians(20.0))
+                                                   / np.tan(np.radians(35.0)))))),
+    (LegacyPullBack(), 34.0, 700),  # a drop of 3.7%: 5,500 x it is 204, below 700
+    (NewtonRaphson(), 20.0, 300)])
+def test_legacy_takes_more_steps_where_the_strength_drops_at_onset(solver, phi_dynamic, steps):
+    from dda.contact import StaticDynamicTransition
+
+    shake = lambda t: (0.3 * G * np.sin(2 * np.pi * 5.0 * t), 0.0)  # noqa: E731
+    law = StaticDynamicTransition(35.0, phi_dynamic)
+    sim = dda.Simulation(column(1, JointMaterial("auto", "auto", law), shake=shake),
+                         dt="auto", solver=solver)
+    assert sim.dt == pytest.approx(1.0 / (steps * 5.0), rel=1e-9)
+    assert f"{steps} steps" in sim.choices
+    assert ("loses" in sim.choices) == (steps > 700)  # the reason is shown where it applies
+
+
 def test_the_shaking_frequency_of_records_and_callables():
     t = np.arange(0.0, 10.0, 0.005)
     record = AccelerationHistory(np.sin(2 * np.pi * 3.0 * t), t)

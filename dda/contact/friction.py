@@ -118,6 +118,16 @@ class FrictionLaw(ABC):
         return FrictionTrial(t_s=t_s, slipping=np.zeros(len(t_s), dtype=bool),
                              strength=np.full(len(t_s), np.inf), state=state)
 
+    def onset_drop(self) -> float:
+        """The share of its strength a contact loses at once when it starts to slide: 0 for a
+        strength that does not drop (the default), ``1 - mu_dynamic / mu_static`` for a drop
+        from static to dynamic friction.
+
+        ``dt="auto"`` reads it for legacy DDA, whose onset of slip lags by up to a step
+        (:mod:`dda.auto_settings`, rule 1): a law whose strength drops at onset overrides it.
+        """
+        return 0.0
+
     def _kernel_parameters(self):
         """``(kind, mu_static, mu_dynamic, cohesion)`` for the compiled OPEN-CLOSE pass
         (:mod:`dda.kernels.open_close`), or None: only a built-in law of its own class has
@@ -396,6 +406,10 @@ class StaticDynamicTransition(CoulombLike):
 
     def history_fields(self) -> dict[str, float]:
         return {"g_se": 0.0, "slip": 0.0, "sliding": 0.0}
+
+    def onset_drop(self) -> float:
+        """``1 - tan(phi_dynamic) / tan(phi_static)``: the strength lost at the onset of slip."""
+        return 0.0 if self.mu_static == 0.0 else 1.0 - self.mu_dynamic / self.mu_static
 
     def strength(self, t_n, length, history=None):
         """``|t_n| tan(phi_dynamic)`` on contacts sliding at the step's start, else
