@@ -17,7 +17,8 @@ run and pooled over the cuts:
 
 Each run is its own process (``--workers`` at a time). Writes ``benchmarks/results/cut_rate.md``
 (another path with ``--out``). About 30 minutes on two cores with the defaults
-(``--auto --seconds 3``: about 20).
+(``--auto --seconds 3``: about 20; ``--auto``, 10 s: about an hour, ``results/
+cut_rate_auto_10s.md``).
 
 ``--auto`` runs the same cuts with the penalty and dt chosen by the simulation
 (``JointMaterial("auto", "auto", ...)``, ``dt="auto"``: 2e10 N/m at about 2.4e-4 s here), whose
