@@ -8,7 +8,7 @@ says what it chose and why. The rule, and the measurements it comes from
 
 1. **The time step resolves the shaking.** ``dt = 1 / (N f)``, with ``f`` the frequency below
    which 99% of the shaking's spectral energy lies (the acceleration sampled at 1 kHz, or at
-   its record's own spacing, over its first ``PROBE_SECONDS``) and ``N`` the solver's
+   its record's own spacing, over its first ``PROBE_SECONDS``) and ``N`` at least the solver's
    ``auto_steps_per_period``: 300 for the fully implicit method, 700 for legacy DDA. The
    rock slope of ``examples/rock_slope.py`` (0.5 s a level, 2 Hz, p = 3 x the inertia) set
    them. Its error is the onset of each slip event, found only at the end of the step in
@@ -44,10 +44,12 @@ says what it chose and why. The rule, and the measurements it comes from
    slope (phi_s 40.5 degrees): about 550% at phi_d 36 (a drop of 0.149; N = 700 / 1000 /
    1500: 0.79 / 0.55 / 0.59%), 1,000% at 31.6 (0.280) and 800% at 25 (0.454, which reaches
    the stopper sooner: N = 1000 / 2500, 0.82 / 0.32%); on the 4 s slope 650% (0.280; N = 700
-   / 1000 / 1540 / 2000: 0.97 / 0.59 / 0.47 / 0.33%). The rule's 820 / 1,540 / 2,500 steps
-   put those at 0.3-0.7%. The fully implicit method's return map lets a contact slide in the
-   very step whose end finds it over its strength, and takes no such rule
-   (``auto_steps_per_drop`` 0).
+   / 1000 / 1540 / 2000: 0.97 / 0.59 / 0.47 / 0.33%). The rule's 822 / 1,539 / 2,498 steps
+   put those at 0.3-0.75% (at 1,520 / 1,539 / 1,550 the paper's drop erred 0.75 / 0.60 /
+   0.71%). The rule applies where shaking sets dt; without shaking the step below is set by
+   how far a block may move, not by slip onsets. The fully implicit method's return map lets
+   a contact slide in the very step whose end finds it over its strength, and takes no such
+   rule (``auto_steps_per_drop`` 0).
 
    Without shaking (and as a cap with it) a
    block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /
@@ -105,10 +107,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from dda._checks import finite_number
+from dda.contact.friction import FrictionLaw
 from dda.penalty_advice import TARGET_DEPTH
 
-__all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose", "onset_drop",
-           "shaking_frequency"]
+__all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose",
+           "largest_onset_drop", "shaking_frequency"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block
 KAPPA = 3.0
@@ -212,29 +216,59 @@ def _block_loads(model, a_max: float) -> tuple[np.ndarray, np.ndarray]:
     return 0.5 * load * factor, carries
 
 
-def onset_drop(model) -> tuple[float, object]:
-    """The largest strength drop at the onset of slip among the scene's friction laws
-    (:meth:`dda.contact.FrictionLaw.onset_drop`), and its law (None: no law drops)."""
+def largest_onset_drop(model) -> tuple[float, FrictionLaw | None]:
+    """The largest strength drop at the onset of slip among a scene's friction laws.
+
+    Parameters
+    ----------
+    model : dda.model.Model
+
+    Returns
+    -------
+    drop : float
+        The largest :meth:`dda.contact.FrictionLaw.onset_drop` of ``model``'s laws, 0 to 1.
+    law : FrictionLaw or None
+        Its law (None when no law's strength drops).
+    """
     drop, which = 0.0, None
     for law in model.joints.laws:
-        value = float(getattr(law, "onset_drop", lambda: 0.0)())
+        value = finite_number("onset_drop()", law.onset_drop(), nonnegative=True,
+                              where=repr(law))
+        if value > 1.0:
+            raise ValueError(f"{law!r}: onset_drop() is the share of its strength a contact "
+                             f"loses at the onset of slip, 0 to 1, got {value}")
         if value > drop:
             drop, which = value, law
     return drop, which
 
 
 def _steps_per_period(model, solver, steps: int) -> tuple[int, str]:
-    """The steps a period of the shaking (rule 1) and why: the solver's
-    ``auto_steps_per_period``, or more where its onset of slip lags and a law's strength drops
-    at onset (``auto_steps_per_drop`` times the drop)."""
+    """The steps a period of the shaking (rule 1), and why.
+
+    Parameters
+    ----------
+    model : dda.model.Model
+    solver : its ``auto_steps_per_drop`` (0 when it has none)
+    steps : the solver's ``auto_steps_per_period``
+
+    Returns
+    -------
+    steps : int
+        ``max(steps, ceil(auto_steps_per_drop * drop))`` with ``drop`` from
+        :func:`largest_onset_drop`.
+    why : str
+        The reason, for ``sim.choices``.
+    """
     per_drop = float(getattr(solver, "auto_steps_per_drop", 0.0))
-    drop, law = onset_drop(model)
-    need = int(np.ceil(per_drop * drop))
+    drop, law = largest_onset_drop(model)
+    product = per_drop * drop
+    need = int(np.ceil(product))
     if need <= steps:
         return steps, "the solver's auto_steps_per_period"
-    return need, (f"the solver finds the onset of slip up to a step late, and {law!r} loses "
-                  f"{100 * drop:.3g}% of its strength there: its auto_steps_per_drop {per_drop:g} "
-                  f"x {drop:.3g}, more than its auto_steps_per_period {steps}")
+    return need, (f"{solver.name} finds the onset of slip up to a step late, and {law!r} loses "
+                  f"{100 * drop:.3g}% of its strength there: the solver's auto_steps_per_drop "
+                  f"{per_drop:g} x {drop:.4g} = {product:.1f}, rounded up; its "
+                  f"auto_steps_per_period is {steps}")
 
 
 def choose(model, solver, dt: float | None, shakes=(), duration: float | None = None,
@@ -244,7 +278,7 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     Parameters
     ----------
     model : dda.model.Model
-    solver : the solver (its ``auto_steps_per_period``)
+    solver : the solver (its ``auto_steps_per_period`` and ``auto_steps_per_drop``)
     dt : the step asked for, or None to choose it
     shakes : the scene's shaking histories (:class:`dda.effects.AccelerationHistory`)
     duration : the run's length when known (the shaking is measured over it)

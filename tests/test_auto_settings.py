@@ -133,7 +133,7 @@ def test_the_laws_say_how_much_strength_they_lose_at_the_onset_of_slip():
 @pytest.mark.parametrize("solver, phi_dynamic, steps", [
     (LegacyPullBack(), 20.0, int(np.ceil(5500.0 * (1.0 - np.tan(np.radians(20.0))
                                                    / np.tan(np.radians(35.0)))))),
-    (LegacyPullBack(), 34.0, 700),  # a drop of 3.7%: 5,500 x it is 204, below 700
+    (LegacyPullBack(), 34.0, 700),  # a drop of 3.7%: 5,500 x it is 202, below 700
     (NewtonRaphson(), 20.0, 300)])
 def test_legacy_takes_more_steps_where_the_strength_drops_at_onset(solver, phi_dynamic, steps):
     from dda.contact import StaticDynamicTransition
@@ -145,6 +145,37 @@ def test_legacy_takes_more_steps_where_the_strength_drops_at_onset(solver, phi_d
     assert sim.dt == pytest.approx(1.0 / (steps * 5.0), rel=1e-9)
     assert f"{steps} steps" in sim.choices
     assert ("loses" in sim.choices) == (steps > 700)  # the reason is shown where it applies
+
+
+def test_the_largest_drop_of_the_scene_s_laws_sets_legacy_s_steps():
+    """A Coulomb default and a transition joint on one pair: the transition's drop counts; a
+    law of one's own says its drop by ``onset_drop``, which must be a share, 0 to 1."""
+    from dda.auto_settings import largest_onset_drop
+    from dda.contact import StaticDynamicTransition
+
+    class Softening(CoulombSingle):
+        def __init__(self, phi, drop):
+            super().__init__(phi=phi)
+            self.drop = drop
+
+        def onset_drop(self):
+            return self.drop
+
+    shake = lambda t: (0.3 * G * np.sin(2 * np.pi * 5.0 * t), 0.0)  # noqa: E731
+    scene = column(2, shake=shake)
+    transition = StaticDynamicTransition(35.0, 20.0)
+    scene.set_joint(JointMaterial("auto", "auto", transition), between=("b0", "b1"))
+    sim = dda.Simulation(scene, dt="auto", solver=LegacyPullBack())
+    drop, law = largest_onset_drop(sim.model)
+    assert law is transition and drop == pytest.approx(transition.onset_drop())
+    assert sim.dt == pytest.approx(1.0 / (np.ceil(5500.0 * drop) * 5.0), rel=1e-9)
+    scene.set_joint(JointMaterial("auto", "auto", Softening(35.0, 0.5)))
+    sim = dda.Simulation(scene, dt="auto", solver=LegacyPullBack())
+    assert sim.dt == pytest.approx(1.0 / (2750 * 5.0), rel=1e-9)  # 0.5 beats 0.43
+    for bad in (1.5, -0.1, float("nan")):
+        scene.set_joint(JointMaterial("auto", "auto", Softening(35.0, bad)))
+        with pytest.raises(ValueError, match="onset_drop"):
+            dda.Simulation(scene, dt="auto", solver=LegacyPullBack())
 
 
 def test_the_shaking_frequency_of_records_and_callables():

@@ -127,8 +127,9 @@ class NonlinearSolver(ABC):
     name = "solver"
     #: steps per period of the shaking that ``dt="auto"`` takes (:mod:`dda.auto_settings`)
     auto_steps_per_period = 300
-    #: ... at least this many times the largest strength drop at the onset of slip of the
-    #: scene's friction laws (:meth:`dda.contact.FrictionLaw.onset_drop`; 0: no such rule)
+    #: the steps per period are at least this many times the largest strength drop at the
+    #: onset of slip of the scene's friction laws (:meth:`dda.contact.FrictionLaw.onset_drop`;
+    #: 0: no such rule)
     auto_steps_per_drop = 0.0
 
     def factors(self) -> FactorSet:
