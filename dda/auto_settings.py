@@ -8,48 +8,51 @@ says what it chose and why. The rule, and the measurements it comes from
 
 1. **The time step resolves the shaking.** ``dt = 1 / (N f)``, with ``f`` the frequency below
    which 99% of the shaking's spectral energy lies (the acceleration sampled at 1 kHz, or at
-   its record's own spacing, over its first ``PROBE_SECONDS``) and ``N`` at least the solver's
-   ``auto_steps_per_period``: 300 for the fully implicit method, 700 for legacy DDA. The
-   rock slope of ``examples/rock_slope.py`` (0.5 s a level, 2 Hz, p = 3 x the inertia) set
-   them. Its error is the onset of each slip event, found only at the end of the step in
-   which it happens: the slide lost per event grows with the delay, up to a step, and with
-   dt commensurate with the table's period every event loses alike. Newton's gap to the
-   rigid block was 0.99 / 0.66 / 0.51 / 1.30 / 1.07 / 0.60 / 0.52 / 0.30 / 0.63 / 0.22 /
-   0.22 / 0.11 / 0.11% at N = 120 / 135 / 150 / 165 / 180 / 200 / 250 / 260 / 280 / 300 /
-   320 / 350 / 400 (the same at p = 10 x the inertia), legacy DDA's 4.6 / 2.0 / 1.4 / 1.2 /
-   0.65 / 0.51 / 0.58 / 0.65 / 0.53 / 0.58 / 0.54% at N = 100 / 200 / 300 / 500 / 600 / 650
-   / 700 / 750 / 800 / 900 / 1000 (its friction is explicit, first order in dt). Over the
-   example's whole 16 s (2 s a level, the shaking's 99% frequency 2.3 Hz) Newton's gap is
-   0.031% at N = 300 (11 s of CPU; the paper's 10 GN/m and 10 MN/m at dt 1e-3: 0.69%, 16 s)
-   and legacy DDA's 0.76 / 1.21 / 0.68 / 0.85 / 0.51% at N = 500 / 700 / 900 / 1000 / 1200
-   (22 s at 700; the paper's settings: 7.7%, 14 s). Those were measured before the joints'
-   impact dashpot; with it, legacy DDA's 16 s erred 1.71 / 1.14-1.53 / 1.39 / 0.98 / 0.89 /
-   0.66 / 0.54 / 0.50% at N = 600 / 700 / 800 / 1000 / 1200 / 1500 / 1800 / 2000 (1.14 and
-   1.53% at dt 6.211e-4 and 6.210e-4 s: where in its step an onset falls moves the error by a
-   third): first order in dt, error times N about 1,000%. Newton's 16 s gap is 0.29 / 0.31 /
-   0.031 / 0.32 / 0.24 / 0.57 / 0.50% at N = 250 / 280 / 300 / 320 / 350 / 400 / 500: the
-   rule's 300 is a fortunate point of a spread of 0.2-0.6% that does not fall with N (with the
-   transition law's drop; with none, phi_d = phi_s, it falls steadily, 0.43 / 0.26 / 0.10 /
-   0.055 / 0.032% at N = 75 / 100 / 150 / 200 / 300).
+   its record's own spacing, over its first ``PROBE_SECONDS``) and ``N`` steps a period,
 
-   Legacy DDA's error there is the transition law's drop from static to dynamic friction at
-   the onset of slip: a contact that starts the step sticking sticks for the whole step, so
-   its slip begins up to a step late, and where the strength drops at onset the block was
-   meant to accelerate at once (by the drop, ``g (mu_s - mu_d) cos(dip)`` on a plane) and
-   loses that speed times the delay for the whole slip that follows. Without a drop the
-   force grows from zero and the delay costs little (the moving base's Coulomb joint: 0.04%
-   at N = 350). So legacy DDA takes at least ``auto_steps_per_drop`` (5,500) times the
-   largest drop ``1 - mu_d / mu_s`` of the scene's laws
-   (:meth:`dda.contact.FrictionLaw.onset_drop`) steps a period. Error times N on the 16 s
-   slope (phi_s 40.5 degrees): about 550% at phi_d 36 (a drop of 0.149; N = 700 / 1000 /
-   1500: 0.79 / 0.55 / 0.59%), 1,000% at 31.6 (0.280) and 800% at 25 (0.454, which reaches
-   the stopper sooner: N = 1000 / 2500, 0.82 / 0.32%); on the 4 s slope 650% (0.280; N = 700
-   / 1000 / 1540 / 2000: 0.97 / 0.59 / 0.47 / 0.33%). The rule's 822 / 1,539 / 2,498 steps
-   put those at 0.3-0.75% (at 1,520 / 1,539 / 1,550 the paper's drop erred 0.75 / 0.60 /
-   0.71%). The rule applies where shaking sets dt; without shaking the step below is set by
-   how far a block may move, not by slip onsets. The fully implicit method's return map lets
-   a contact slide in the very step whose end finds it over its strength, and takes no such
-   rule (``auto_steps_per_drop`` 0).
+   ``N = auto_steps_per_period + ceil(auto_steps_per_drop * drop)``,
+
+   150 + 550 drop for the fully implicit method and 300 + 5,000 drop for legacy DDA, where
+   ``drop`` is the largest share ``1 - mu_d / mu_s`` of its strength that a law of the scene
+   loses at the onset of slip (:meth:`dda.contact.FrictionLaw.onset_drop`, 0 for Coulomb and
+   Barton-Bandis). A slip history's error is where each slip event starts, found only at
+   the end of the step in which it happens. Without a drop the friction force grows from
+   zero and a late onset costs little. With one the block was meant to accelerate at once
+   (by ``g (mu_s - mu_d) cos(dip)`` on a plane), and loses that speed times the delay for the
+   whole slip that follows; legacy DDA, whose contact that starts a step sticking sticks for
+   the whole step, loses up to a step of it, so its error goes as ``(a + b drop) / N``. The
+   rock slope of ``examples/rock_slope.py`` (the face-onset transition law, phi_s 40.5
+   degrees, phi_d from 40.5 to 25: drops 0 / 0.052 / 0.149 / 0.280 / 0.454; the tests' 4 s,
+   0.5 s a level, and the example's 16 s, 2 s a level; ``p = KAPPA`` x the inertia, the
+   joints' default dashpots) erred, against the rigid block until the stopper:
+
+   =====  ============================================  =======================================
+   drop   legacy: N 0.9x / rule / 1.1x; 4 s; 16 s       Newton: N 0.9x / rule / 1.1x; 4 s; 16 s
+   =====  ============================================  =======================================
+   0      270 / **300** / 330: 0.32 / **0.34** / 0.26;  135 / **150** / 165: 0.19 / **0.09** /
+          0.06 / **0.13** / 0.05%                       0.15; 0.13 / **0.10** / 0.08%
+   0.052  504 / **560** / 616: 0.49 / **0.39** / 0.43;  161 / **179** / 196: 0.20 / **0.14** /
+          0.65 / **0.45** / 0.49%                       0.10; 0.14 / **0.09** / 0.18%
+   0.149  942 / **1,047** / 1,151: 0.50 / **0.45** /    209 / **233** / 256: 0.25 / **0.21** /
+          0.45; 0.71 / **0.62** / 0.57%                 0.38; 0.18 / **0.18** / 0.38%
+   0.280  1,529 / **1,699** / 1,868: 0.44 / **0.45** /  273 / **304** / 334: 0.11 / **0.32** /
+          0.37; 0.60 / **0.51** / 0.47%                 0.13; 0.75 / **0.16** / 0.47%
+   0.454  2,313 / **2,571** / 2,828: 0.38 / **0.29** /  360 / **400** / 440: 0.62 / **0.28** /
+          0.31; 0.55 / **0.38** / 0.45%                 0.30; 0.82 / **0.57** / 0.08%
+   =====  ============================================  =======================================
+
+   and with too few steps: legacy DDA 0.48 / 0.41% at 150 and 1.08 / 1.31% at 300 with the
+   drop of 0.052 (the form ``max(base, b drop)`` is wrong there); Newton 0.34 / 0.26% at 100
+   without a drop, and 0.94 / 1.01% (drop 0.149) and 1.31 / 1.41% (0.280) at 150.
+   Legacy DDA's error times ``N`` is 30-110% without a drop and 700-1,200% at the drops of
+   0.15-0.45: first order in dt. Newton's return map lets a contact slide in the very step
+   whose end finds it over its strength; with a drop its error falls to 0.1-0.8% by ``N`` of
+   about 200-250 and no further (a spread over ``N`` from where in its step each onset
+   falls: 0.03-0.82% at ``N`` 250-500 on the 16 s slope), and without one it is first order
+   in dt with a small constant. On the moving base (no
+   drop) the rule's 150 / 300 steps err 0.40% / 0.13% (the table of rule 2). The
+   measurements before this form of the rule (legacy DDA 700 steps, or 5,500 drop where more;
+   Newton 300) are in ``benchmarks/README.md``.
 
    Without shaking (and as a cap with it) a
    block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /
@@ -60,19 +63,21 @@ says what it chose and why. The rule, and the measurements it comes from
    that a contact is not a soft spring the block bounces on, soft enough that OPEN-CLOSE
    settles (the step's matrix is not dominated by the springs, see
    :mod:`dda.penalty_advice`). On the block on a moving base (``benchmarks/accuracy_cost.py``'s
-   case, 1 s of 1 g at 2 Hz) the error against the analytical slip was, with ``p = KAPPA 2 m /
-   dt^2`` and ``dt = 0.5 s / N``, for legacy DDA:
+   case, 1 s of 1 g at 2 Hz, the joints' default dashpots) the error against the analytical
+   slip was, with ``p = kappa 2 m / dt^2`` and ``dt = 0.5 s / N``:
 
-   =======  ===========  =========  =========  ==========
-   N        kappa 0.3    kappa 1    kappa 3    kappa 10
-   =======  ===========  =========  =========  ==========
-   100      8.9%         1.5%       2.3%       2.9%
-   200      1.5%         0.52%      0.14%      0.64%
-   300      0.96%        0.35%      0.13%      0.17%
-   500      0.29%        0.06%      0.02%      0.03%
-   =======  ===========  =========  =========  ==========
+   =====  ==============================  ==============================
+   N      legacy DDA, kappa 3 / 10 / 30   Newton, kappa 3 / 10 / 30
+   =====  ==============================  ==============================
+   75     3.5 / 7.5 / 15.4%               3.5 / 2.9 / 1.2%
+   100    2.3 / 2.6 / 13.1%               0.92 / 0.26 / 0.26%
+   150    0.30 / 0.48 / 0.55%             0.40 / 0.18 / 0.18%
+   200    0.44 / 0.54 / 3.3%              0.20 / 0.12 / 0.23%
+   300    0.13 / 0.17 / 0.81%             0.086 / 0.025 / 0.028%
+   =====  ==============================  ==============================
 
-   and for Newton 9.6 / 2.3 / 0.92 / 0.32% at N = 100, 1.7 / 0.60 / 0.20 / 0.11% at N = 200.
+   Legacy DDA wants the softer springs (its stick is explicit, and a stiff one rings);
+   ``KAPPA`` 3 serves both.
 3. **No contact sinks deeper than 1% of its half-width under its load**: the penalty is raised
    to ``F / (TARGET_DEPTH h)`` where a block's load ``F`` (per vertex contact, two sharing a
    face) is its weight, the weight of the free blocks above it (each by the share of its
@@ -93,11 +98,9 @@ says what it chose and why. The rule, and the measurements it comes from
 A joint with a number keeps it; only "auto" values are chosen, all with the same rule (the
 lightest free block and the most loaded contact of the scene).
 
-The sweeps above were run without the impact dashpot (``restitution`` 1), before it became
-the joints' default. With it (``benchmarks/results/auto_settings.md``) the rule's errors are
-Newton's 0.086% / 0.300% / 0.031% (moving base / rock slope 4 s / 16 s, the same) and legacy
-DDA's 0.039% / 0.400% / 0.596% with the drop's steps (0.039% / 0.971% / 1.139% at 700 steps a
-period).
+The rule's own runs (``benchmarks/results/auto_settings.md``) err 0.40% / 0.32% / 0.16%
+(Newton: moving base / rock slope 4 s / 16 s; 150 / 304 / 304 steps a period) and 0.13% /
+0.45% / 0.51% (legacy DDA: 300 / 1,699 / 1,699).
 
 """
 
@@ -254,21 +257,21 @@ def _steps_per_period(model, solver, steps: int) -> tuple[int, str]:
     Returns
     -------
     steps : int
-        ``max(steps, ceil(auto_steps_per_drop * drop))`` with ``drop`` from
-        :func:`largest_onset_drop`.
+        ``N = steps + ceil(auto_steps_per_drop * drop)``, with ``drop`` from
+        :func:`largest_onset_drop`: the error of a slip history goes as ``(a + b drop) / N``.
     why : str
         The reason, for ``sim.choices``.
     """
     per_drop = float(getattr(solver, "auto_steps_per_drop", 0.0))
     drop, law = largest_onset_drop(model)
-    product = per_drop * drop
-    need = int(np.ceil(product))
-    if need <= steps:
+    extra = int(np.ceil(per_drop * drop))
+    if extra <= 0:
         return steps, "the solver's auto_steps_per_period"
-    return need, (f"{solver.name} finds the onset of slip up to a step late, and {law!r} loses "
-                  f"{100 * drop:.3g}% of its strength there: the solver's auto_steps_per_drop "
-                  f"{per_drop:g} x {drop:.4g} = {product:.1f}, rounded up; its "
-                  f"auto_steps_per_period is {steps}")
+    return steps + extra, (
+        f"the solver's auto_steps_per_period {steps}, and as {solver.name} finds the onset of "
+        f"slip only at the end of a step and {law!r} loses {100 * drop:.3g}% of its strength "
+        f"there, its auto_steps_per_drop {per_drop:g} x {drop:.4g} = {per_drop * drop:.1f} "
+        "more, rounded up")
 
 
 def choose(model, solver, dt: float | None, shakes=(), duration: float | None = None,

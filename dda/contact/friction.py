@@ -123,8 +123,9 @@ class FrictionLaw(ABC):
         strength that does not drop (the default), ``1 - mu_dynamic / mu_static`` for a drop
         from static to dynamic friction.
 
-        ``dt="auto"`` reads it for legacy DDA, whose onset of slip lags by up to a step
-        (:mod:`dda.auto_settings`, rule 1): a law whose strength drops at onset overrides it.
+        ``dt="auto"`` takes more steps a period the larger it is (:mod:`dda.auto_settings`,
+        rule 1: a slip starts only at the end of the step in which it is due, legacy DDA's up
+        to a step late): a law whose strength drops at onset overrides it.
         """
         return 0.0
 
