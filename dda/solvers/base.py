@@ -125,12 +125,12 @@ class NonlinearSolver(ABC):
     """A strategy that solves one time step (DESIGN.md: LegacyPullBack, NewtonRaphson)."""
 
     name = "solver"
-    #: steps per period of the shaking that ``dt="auto"`` takes with friction laws whose
-    #: strength does not drop at the onset of slip (:mod:`dda.auto_settings`, rule 1)
-    auto_steps_per_period = 150
+    #: steps per period of the shaking that ``dt="auto"`` takes (:mod:`dda.auto_settings`,
+    #: rule 1)
+    auto_steps_per_period = 300
     #: the steps added per unit of the largest strength drop at the onset of slip of the
     #: scene's friction laws (:meth:`dda.contact.FrictionLaw.onset_drop`; 0: none added)
-    auto_steps_per_drop = 550.0
+    auto_steps_per_drop = 0.0
 
     def factors(self) -> FactorSet:
         """The sparse factorizations this solver keeps from step to step (their symbolic
