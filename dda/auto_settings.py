@@ -63,7 +63,8 @@ says what it chose and why. The rule, and the measurements it comes from
    erred 2.5 / 2.2 / 1.9 / 2.1 / 1.5 / 0.34 / 0.36% at 1.5 g; legacy DDA at 300 / 400 / 500 /
    700 / 900 / 1,200 1.5 / 3.2 / 1.2 / 0.95 / 0.35 / 0.37%. A rule for it would need the
    friction coefficient against the shaking's peak; locating the reversal within the step
-   would remove it.
+   removed it in a prototype (1.5 g: 0.18-0.20% Newton, 0.10-0.13% legacy DDA, dt within 5%
+   of the rule's), which is not kept yet (``benchmarks/README.md``).
 
    Without shaking (and as a cap with it) a
    block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /
