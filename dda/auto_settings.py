@@ -127,7 +127,7 @@ from dda.contact.friction import FrictionLaw
 from dda.penalty_advice import TARGET_DEPTH
 
 __all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose",
-           "largest_onset_drop", "shaking_frequency"]
+           "largest_onset_drop", "shaking_frequency", "steps_for_drop"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block
 KAPPA = 3.0
@@ -257,6 +257,24 @@ def largest_onset_drop(model) -> tuple[float, FrictionLaw | None]:
     return drop, which
 
 
+def steps_for_drop(steps: int, per_drop: float, drop: float) -> int:
+    """Rule 1's steps a period: ``steps + ceil(per_drop * drop)``.
+
+    Parameters
+    ----------
+    steps : the solver's ``auto_steps_per_period``
+    per_drop : the solver's ``auto_steps_per_drop``
+    drop : the largest share of its strength a law of the scene loses at the onset of slip
+        (:func:`largest_onset_drop`)
+
+    Examples
+    --------
+    >>> steps_for_drop(700, 3000.0, 0.2797)  # legacy DDA on the rock slope's 40.5 / 31.6
+    1540
+    """
+    return int(steps) + max(int(np.ceil(per_drop * drop)), 0)
+
+
 def _steps_per_period(model, solver, steps: int) -> tuple[int, str]:
     """The steps a period of the shaking (rule 1), and why.
 
@@ -276,10 +294,10 @@ def _steps_per_period(model, solver, steps: int) -> tuple[int, str]:
     """
     per_drop = float(getattr(solver, "auto_steps_per_drop", 0.0))
     drop, law = largest_onset_drop(model)
-    extra = int(np.ceil(per_drop * drop))
-    if extra <= 0:
+    need = steps_for_drop(steps, per_drop, drop)
+    if need == steps:
         return steps, "the solver's auto_steps_per_period"
-    return steps + extra, (
+    return need, (
         f"the solver's auto_steps_per_period {steps}, and as {solver.name} finds the onset of "
         f"slip only at the end of a step and {law!r} loses {100 * drop:.3g}% of its strength "
         f"there, its auto_steps_per_drop {per_drop:g} x {drop:.4g} = {per_drop * drop:.1f} "
