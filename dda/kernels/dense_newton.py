@@ -40,8 +40,8 @@ from dda.kernels.kinematics import first_variations, pair_increments
 from dda.kernels.open_close import contact_response, step_start
 from dda.kernels.tangent import tangent_rows
 
-__all__ = ["dense_newton", "newton_dense_step", "TANGENT_TERMS", "CONVERGED", "NOT_CONVERGED",
-           "DIVERGED", "SINGULAR", "NOT_FINITE", "STALLED"]
+__all__ = ["dense_newton", "newton_dense_step", "penalty_round_off", "TANGENT_TERMS", "CONVERGED",
+           "NOT_CONVERGED", "DIVERGED", "SINGULAR", "NOT_FINITE", "STALLED"]
 
 CONVERGED, NOT_CONVERGED, DIVERGED, SINGULAR, NOT_FINITE, STALLED = 0, 1, 2, 3, 4, 5
 
@@ -70,6 +70,49 @@ def _moved(p, a, dd):
                 s += a[c, k, j] * dd[c, j]
             out[c, k] = p[c, k] + s
     return out
+
+
+@njit(cache=True)
+def penalty_round_off(p1, p2, p3, a1, a2, a3, kn, ps):
+    """The |R| that the round-off of the contacts' coordinates leaves, whatever the iterate.
+
+    A contact's gaps are differences of its points' coordinates, ``g_n = (x_1 - x_2) . n``
+    and ``g_s`` from ``x_3 - x_2``, each known to about ``eps`` times the coordinates'
+    size; its forces to its stiffnesses times that, and its residual rows
+    ``r_c = t_n E + t_s I`` (12 entries) to those times the rows' size. With
+    ``|E|, |I| <= |A_1 - A_2| + |A_3 - A_2|`` (Frobenius norms of the points' maps) and the
+    contacts' round-off independent of each other,
+
+        R_floor = sqrt( sum_c [ (k_n + k_s) (|A_1 - A_2| + |A_3 - A_2|)
+                                eps (|x_1| + |x_2| + |x_3|)_max ]^2 ).
+
+    With a penalty of 1e13 N/m (1,000 E) the floor of a 0.3 m block resting on two
+    contacts is some 1e-2 N against forces of 200 N: 5e-5 of them, where ``ROUND_OFF``
+    (1e-6 of the forces) expects the round-off of the system's condition number only.
+
+    Parameters
+    ----------
+    p1, p2, p3 : (m, 2) the contacts' vertex and edge ends
+    a1, a2, a3 : (m, 2, 12) their maps
+    kn, ps : (m,) the normal force's stiffness and the shear penalty
+    """
+    eps = np.finfo(np.float64).eps
+    total = 0.0
+    for c in range(p1.shape[0]):
+        size = 0.0
+        for p in (p1, p2, p3):
+            size += max(abs(p[c, 0]), abs(p[c, 1]))
+        da = 0.0
+        db = 0.0
+        for k in range(2):
+            for j in range(12):
+                u = a1[c, k, j] - a2[c, k, j]
+                w = a3[c, k, j] - a2[c, k, j]
+                da += u * u
+                db += w * w
+        term = (abs(kn[c]) + abs(ps[c])) * (math.sqrt(da) + math.sqrt(db)) * eps * size
+        total += term * term
+    return math.sqrt(total)
 
 
 @njit(cache=True)
@@ -194,6 +237,8 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
             for i in range(6):
                 force_norm += block_f[b, i] * block_f[b, i]
     force_norm = math.sqrt(force_norm)
+    # the round-off floor: ROUND_OFF of the forces, or what the contacts' coordinates leave
+    penalty_floor = penalty_round_off(p1, p2, p3, a1, a2, a3, kn, ps)
     base = d.copy()
     step = np.zeros_like(d)
     has_base = False
@@ -215,7 +260,8 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
             block_k, d, block_f, free, rigid, bj, bk, residual)
         norm = _norm(r_free)
         scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
-        if (norm <= tol * scale or _at_round_off(norm, norms, n_norms, round_off * scale)
+        if (norm <= tol * scale or _at_round_off(norm, norms, n_norms,
+                                                      max(round_off * scale, penalty_floor))
                 or (noise_floor and norm <= round_off * scale and norm <= _noise_floor(
                     free, rigid, bj, bk, residual, closed, t_n, t_s, kn, gap_tol))):
             norms[n_norms] = norm
