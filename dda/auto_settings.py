@@ -52,19 +52,19 @@ says what it chose and why. The rule, and the measurements it comes from
    base shaken otherwise (below).
 
    The moving base (a block on a flat table, Coulomb tan 36.4 = 0.737; 2 Hz; the rule's
-   runs: Newton / legacy DDA) errs 0.62 / 0.11% at 0.8 g (1.4 mm of slip), 0.17 / 0.02%
-   at 0.9 g, 0.086 / 0.039% at 1 g (0.086 / 0.039% at 1 Hz, 0.090 / 0.038% at 5 Hz), 0.065
-   / 0.028% at 1.3 g, 2.1 / 0.95% at 1.5 g and 0.42 / 0.04% at 1.84 g. **Not covered: slip
-   that reverses without sticking.** From about 1.3 g (1.8 times the friction) the block
-   slides back and forth without stopping between, and at each reversal the friction force
-   flips by ``2 mu N``, again found only at the end of the step: the velocity errs by up to
-   ``2 mu g dt`` until the next reversal, by a share of it that depends on where in its step
-   the reversal falls. Newton at 150 / 200 / 250 / 300 / 400 / 600 / 1,200 steps a period
-   erred 2.5 / 2.2 / 1.9 / 2.1 / 1.5 / 0.34 / 0.36% at 1.5 g; legacy DDA at 300 / 400 / 500 /
-   700 / 900 / 1,200 1.5 / 3.2 / 1.2 / 0.95 / 0.35 / 0.37%. A rule for it would need the
-   friction coefficient against the shaking's peak; locating the reversal within the step
-   removed it in a prototype (1.5 g: 0.18-0.20% Newton, 0.10-0.13% legacy DDA, dt within 5%
-   of the rule's), which is not kept yet (``benchmarks/README.md``).
+   runs: Newton / legacy DDA) errs 0.63 / 0.20% at 0.8 g (1.4 mm of slip), 0.17 / 0.09%
+   at 0.9 g, 0.086 / 0.039% at 1 g (0.086 / 0.040% at 1 Hz, 0.089 / 0.039% at 5 Hz), 0.050
+   / 0.036% at 1.3 g, 0.20 / 0.13% at 1.5 g and 0.037 / 0.013% at 1.84 g. **Slip that
+   reverses without sticking**: from about 1.3 g (1.8 times the friction) the block slides
+   back and forth without stopping between, and at each reversal the friction force flips by
+   ``2 mu N``. Found only at the end of its step, it let the velocity err by up to ``2 mu g
+   dt`` until the next reversal, by a share that depended on where in its step the reversal
+   fell: Newton at 150 / 200 / 250 / 300 / 400 / 600 / 1,200 steps a period erred 2.5 / 2.2
+   / 1.9 / 2.1 / 1.5 / 0.34 / 0.36% at 1.5 g; legacy DDA at 300 / 400 / 500 / 700 / 900 /
+   1,200 1.5 / 3.2 / 1.2 / 0.95 / 0.35 / 0.37%. The rule does not see it; the simulation
+   ends such a step at the reversal (:mod:`dda.slip_events`, scenes of up to 10 free blocks),
+   which the numbers above include (1.5 g, dt within 5% of the rule's: 0.18-0.20% Newton,
+   0.10-0.27% legacy DDA). The rule's steps were derived before reversals were located.
 
    Without shaking (and as a cap with it) a
    block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /

@@ -75,7 +75,8 @@ STATS_UNITS = {"time": "s", "dt": "s", "iterations": "1", "open_close_passes": "
 #: Units of a sweep row's outcome columns (:func:`dda.studies.sweep.sweep`; "1": a count or a
 #: ratio). The settings' columns are the study's own.
 ROW_UNITS = {"error": "1", "cpu_time": "s", "wall_time": "s", "steps": "1", "iterations": "1",
-             "open_close_passes": "1", "solves": "1", "dt_cuts": "1", "contacts_max": "1",
+             "open_close_passes": "1", "solves": "1", "dt_cuts": "1", "slip_reversals": "1",
+             "contacts_max": "1",
              "dt": "s", "penalty": "N/m"}
 
 
@@ -205,7 +206,7 @@ def _run_attributes(result) -> dict:
     attrs = {"title": "dda run", "dda_version": __version__,
              "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
              "gravity": float(result.scene.gravity), "steps": len(stats),
-             "dt_cuts": len(stats.cuts)}
+             "dt_cuts": len(stats.cuts), "slip_reversals": len(stats.reversals)}
     attrs.update({k: v for k, v in result._settings.items()
                   if isinstance(v, (int, float, str)) and v != ""})
     return attrs

@@ -61,7 +61,9 @@ class StepStats:
     spring penetration ``-t_n / p_n``, m) and the seconds spent in each part of the step
     (retries included): detection_time, contact_element_time, return_map_time, assembly_time,
     solve_time, guard_time (see :mod:`dda.profiling`). ``residual_norms`` holds the Newton
-    out-of-balance norms of every step and ``cuts`` every dt cut as (time, dt, reason).
+    out-of-balance norms of every step, ``cuts`` every dt cut as (time, dt, reason) and
+    ``reversals`` every step shortened to end at a slip reversal as (time at its start, the
+    share of the step it kept) (:mod:`dda.slip_events`).
 
     Memory: the rows are kept as compact columns (times and dt in float64, counts in the
     smallest unsigned integers that hold them, depths and residual norms in float32; the
@@ -102,6 +104,7 @@ class StepStats:
         self._rows: list[tuple] = []  # the newest rows, in FIELDS order
         self._row_norms: list = []
         self.cuts: list[tuple[float, float, str]] = []
+        self.reversals: list[tuple[float, float]] = []
 
     def append(self, residual_norms=(), **row):
         """Add one step's row (every field of :attr:`FIELDS` by name)."""
@@ -262,6 +265,8 @@ class StepStats:
             f"{len(self)} steps, {wall.sum():.3g} s wall ({1e3 * wall.mean():.3g} ms/step), "
             f"{self['iterations'].sum()} iterations, max {self['open_close_passes'].max()} "
             f"OPEN-CLOSE passes, {len(self.cuts)} dt cuts"
+            + (f", {len(self.reversals)} steps ended at a slip reversal" if self.reversals
+               else "")
         )
 
 

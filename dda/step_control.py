@@ -67,6 +67,8 @@ class StepControl:
     ceiling: float = 0.0
     # the untracked penetration (tolerances) of this step's last refused try (-1: none yet)
     tried_untracked: float = -1.0
+    # accepted steps before a slip reversal is located again (dda.slip_events)
+    reversal_wait: int = 0
 
     def __post_init__(self):
         if self.dt_now is None:
@@ -104,6 +106,8 @@ class StepControl:
         self.tried_untracked = -1.0
         self.steps += 1
         self.good_steps += 1
+        if self.reversal_wait > 0:
+            self.reversal_wait -= 1
         if self.probing and self.good_steps >= self.grow_after:  # the doubled size held
             self.probing = False
             if not self._below_ceiling(self.dt_now):

@@ -60,7 +60,7 @@ def test_interrupted_run_resumes_with_the_same_numbers(tmp_path, uninterrupted):
 def test_killed_process_keeps_its_files_and_resumes(tmp_path, uninterrupted, sig):
     """A subprocess is signalled mid-run: every VTU file it wrote is whole, the index lists
     them, and resuming from its checkpoint finishes the run with the uninterrupted numbers."""
-    ref, _ = uninterrupted
+    ref, ref_result = uninterrupted
     env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
     proc = subprocess.Popen(
         [sys.executable, "-c", "from tests.checkpoint_scene import main; main()",
@@ -88,8 +88,9 @@ def test_killed_process_keeps_its_files_and_resumes(tmp_path, uninterrupted, sig
     resumed.run()
     assert_same_state(resumed, ref)
     files = sorted(tmp_path.glob("case_*.vtu"))
-    assert len(files) == STEPS + 1  # the start and every step, each once
-    assert (tmp_path / "case.pvd").read_text().count("<DataSet") == STEPS + 1
+    # the start and every step, each once (STEPS and the steps ended at a slip reversal)
+    assert len(files) == len(ref_result.time) >= STEPS + 1
+    assert (tmp_path / "case.pvd").read_text().count("<DataSet") == len(files)
 
 
 def test_a_killed_run_leaves_an_index_of_its_frames(tmp_path):

@@ -127,6 +127,7 @@ def test_the_attributes_say_what_the_run_was(dropped):
     assert attrs["dt"] == 1e-3 and attrs["record_every"] == 2
     assert attrs["solver"] == repr(sim.solver) and attrs["analysis"] == "dynamic"
     assert attrs["steps"] == len(result.stats) == 40 and attrs["dt_cuts"] == 0
+    assert attrs["slip_reversals"] == len(result.stats.reversals)
     assert attrs["gravity"] == 9.81 and attrs["dda_version"] == dda.__version__
     assert re.fullmatch(r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\+00:00", attrs["created"])
     assert "choices" not in attrs  # empty: nothing was "auto"

@@ -26,7 +26,7 @@ from dda.studies.sweep import (
 )
 
 DETERMINISTIC = ("study", "solver", "dt", "penalty", "error", "peak_error", "steps",
-                 "iterations", "open_close_passes", "solves", "dt_cuts", "status")
+                 "iterations", "open_close_passes", "solves", "dt_cuts", "slip_reversals", "status")
 
 
 def small_grid():
@@ -65,7 +65,8 @@ def test_process_pool_and_dask_give_the_same_rows():
         (c.settings["solver"], c.settings["dt"]) for c in cases]
     for r in rows:
         assert r["status"] == "ok"
-        assert r["steps"] == round(0.3 / r["dt"])
+        # a step ended at a slip reversal may add one (dda.slip_events)
+        assert round(0.3 / r["dt"]) <= r["steps"] <= round(0.3 / r["dt"]) + r["slip_reversals"]
         assert r["cpu_time"] > 0.0 and r["wall_time"] > 0.0
         assert 0.0 < r["error"] < 1.0
         assert r["solves"] >= r["steps"]

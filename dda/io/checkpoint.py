@@ -123,6 +123,7 @@ def _simulation_to_data(sim, store) -> dict:
         "max_open_close": int(sim.max_open_close), "record_every": int(sim.record_every),
         "max_displacement_ratio": float(sim.max_displacement_ratio),
         "penetration_tolerance": float(sim.penetration_tolerance), "choices": sim.choices,
+        "locate_reversals": bool(sim.locate_reversals),
         "normal_penalty": store.put("model/normal_penalty", joints.normal_penalty),
         "shear_penalty": store.put("model/shear_penalty", joints.shear_penalty),
     }
@@ -252,16 +253,21 @@ def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict
 
     scene = scene_from_data(header["scene"], store)
     s = header["simulation"]
+    if isinstance(s, dict):  # a checkpoint written before slip reversals were located
+        s = {"locate_reversals": False, **s}
     _expect(s, "simulation", {"dt", "solver", "analysis", "velocity_carry", "max_open_close",
                               "record_every", "max_displacement_ratio",
                               "penetration_tolerance", "choices", "normal_penalty",
-                              "shear_penalty"})
+                              "shear_penalty", "locate_reversals"})
+    if not isinstance(s["locate_reversals"], bool):
+        raise CheckpointError("simulation.locate_reversals: not true or false")
     try:
         sim = Simulation(scene, dt=s["dt"], solver=_solver(s["solver"]),
                          analysis=s["analysis"], velocity_carry=s["velocity_carry"],
                          max_open_close=s["max_open_close"], record_every=s["record_every"],
                          max_displacement_ratio=s["max_displacement_ratio"],
-                         penetration_tolerance=s["penetration_tolerance"])
+                         penetration_tolerance=s["penetration_tolerance"],
+                         locate_reversals=s["locate_reversals"])
     except (TypeError, ValueError) as exc:
         raise CheckpointError(f"its simulation's settings: {exc}") from None
     joints = sim.model.joints
@@ -379,8 +385,9 @@ def _control(data, initial):
 
     names = {f.name for f in fields(StepControl)}
     if isinstance(data, dict):
-        # a checkpoint written before the control remembered the size that failed
-        data = {"ceiling": 0.0, **data}
+        # a checkpoint written before the control remembered the size that failed, or
+        # before slip reversals were located
+        data = {"ceiling": 0.0, "reversal_wait": 0, **data}
     _expect(data, "control", names)
     for k, v in data.items():
         kind = type(getattr(initial, k))

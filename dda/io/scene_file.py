@@ -108,7 +108,7 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
                                           # unsettled_predictor: newton's
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
                                           # record_every, max_displacement_ratio,
-                                          # penetration_tolerance
+                                          # penetration_tolerance, locate_reversals
 
     [output]
     prefix = "case"                       # files OUT/case_00000.vtu ... and OUT/case.pvd
@@ -556,7 +556,7 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     effects += _read_water(r, data, scene.set_water_table)
     solver, settings, duration = _read_simulation(r, data, settings=(
         "dt", "analysis", "velocity_carry", "max_open_close", "record_every",
-        "max_displacement_ratio", "penetration_tolerance"))
+        "max_displacement_ratio", "penetration_tolerance", "locate_reversals"))
     output = _read_output(r, data, path, keys={"dir", "prefix", "every", "checkpoint",
                                                "checkpoint_every"},
                           outside=allow_outside_output)

@@ -20,8 +20,8 @@ Examples
 ...              penalty=[2e9])
 >>> with ThreadPoolExecutor(2) as pool:
 ...     rows = sweep(cases, executor=pool, progress=False)
->>> [(r["solver"], r["steps"], r["status"]) for r in rows]
-[('legacy', 20, 'ok'), ('newton', 20, 'ok')]
+>>> [(r["solver"], r["steps"], r["slip_reversals"], r["status"]) for r in rows]
+[('legacy', 21, 1, 'ok'), ('newton', 21, 1, 'ok')]
 """
 
 from __future__ import annotations
@@ -156,6 +156,7 @@ def _run_case(case: Case) -> dict:
            "wall_time": wall, "steps": len(st), "iterations": int(st["iterations"].sum()),
            "open_close_passes": int(st["open_close_passes"].sum()),
            "solves": int(st["solves"].sum()), "dt_cuts": len(st.cuts),
+           "slip_reversals": len(st.reversals),
            "contacts_max": int(st["contacts"].max()) if len(st) else 0, "status": status}
     for name in SECTIONS:
         row[f"{name}_time"] = float(st[f"{name}_time"].sum())
@@ -236,7 +237,8 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
         A list of dicts (it prints as a rounded table; ``rows.to_pandas()`` is a DataFrame).
         Per case: ``study``, the settings, ``error`` (relative, NaN for a failed run),
         ``cpu_time`` and ``wall_time`` (s, of the run alone), ``steps``, ``iterations``,
-        ``open_close_passes``, ``solves``, ``dt_cuts``, ``contacts_max``, ``status`` ("ok" or
+        ``open_close_passes``, ``solves``, ``dt_cuts``, ``slip_reversals`` (steps ended at a
+        slip reversal, :mod:`dda.slip_events`), ``contacts_max``, ``status`` ("ok" or
         why it stopped) and the seconds per part of the step (``detection_time`` ...).
     """
     cases = list(cases)
@@ -273,7 +275,8 @@ def _label(row) -> str:
 
 
 _OUTCOME = {"error", "cpu_time", "wall_time", "steps", "iterations", "open_close_passes",
-            "solves", "dt_cuts", "contacts_max", "status"} | {f"{n}_time" for n in SECTIONS}
+            "solves", "dt_cuts", "slip_reversals", "contacts_max", "status"} | {
+                f"{n}_time" for n in SECTIONS}
 
 
 def write_csv(rows: Sequence[dict], path) -> Path:

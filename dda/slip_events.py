@@ -1,0 +1,149 @@
+"""Slip reversals located within the step.
+
+A contact that slides one way at the start of a step and the other way at its end reversed
+inside it, and there its friction force flipped by ``2 mu N``. The step finds the flip only
+at its end: the solver applies one direction's friction to the whole step (Newton's return map
+the end's, legacy DDA's pull-back the start's), so the block's velocity errs by up to ``2 mu
+g dt`` until the next reversal, by the share of the step that lay on the wrong side. Where a
+block slides back and forth without sticking between (a table shaken at more than about 1.8
+times the friction), that error decides the slide: a block on a table at 1.5 g erred
+0.5-2.2% under Newton at 300 steps a period and 0.4-1.9% under legacy DDA at 700, with dt
+within 5% (``benchmarks/README.md``).
+
+The step is taken again, ended where the reversing contact's slip velocity crosses zero. The
+slip velocity ``w`` of a contact is the relative velocity of its vertex and its edge along the
+edge, from the blocks' velocities (the first-order displacement function ``T(x)`` of each);
+Newmark's ``gamma = 1`` makes the velocity linear in the step's acceleration, so the crossing
+lies at
+
+.. math::
+
+    \\phi = \\frac{w_0}{w_0 - w_1}
+
+of the step, ``w_0`` at its start and ``w_1`` at its end. A shorter step that still shows a
+reversal puts the crossing earlier again (at most :data:`ITERATIONS` tries). The shortened
+step is committed; the step control's size is unchanged, so the next step is as long as
+before. With it the table at 1.5 g erred 0.18-0.20% (Newton) and 0.10-0.27% (legacy DDA) over
+the same dt.
+
+A contact whose normal force changes more than :data:`NORMAL_RATIO` times in the step
+turned in an impact, not by its friction, and is left alone; after a located reversal the
+next :data:`WAIT` steps are not shortened (a vertex rattling in a corner reverses in step
+after step). A step in which a contact stops and sticks counts too: Newmark's end velocity
+``2 d / dt - v0`` turns its slip velocity to about ``-w0`` whatever the step's length, so
+such a step is shortened to near its middle, up to three times (measured on the
+``benchmarks/accuracy_cost.py`` grid: 16 of 80 cells more accurate, legacy DDA at 150 steps
+a period 18.8% -> 0.30%; 4 less, Newton at 50 steps a period 0.64-1.03% -> 1.92-3.89%;
+``benchmarks/README.md``).
+
+Every step with a sliding contact is checked (a compiled loop, about 1 us for a few
+contacts), and every reversal costs up to :data:`ITERATIONS` more solves of its step. In a
+jointed mass many contacts reverse by micrometres in most steps (the cut slope of
+``examples/jointed_slope.py``: 11 contacts a step at the median, 1,556 retakes in 500 steps,
+3.2 times the CPU), so :class:`dda.Simulation` locates reversals by default only in scenes of
+at most :data:`AUTO_BLOCKS` free blocks (``locate_reversals``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from dda.contact.contacts import OPEN, SLIP
+
+__all__ = ["AUTO_BLOCKS", "ITERATIONS", "MIN_FRACTION", "NORMAL_RATIO", "WAIT",
+           "reversal_fraction"]
+
+#: free blocks up to which ``Simulation(locate_reversals=None)`` locates reversals
+AUTO_BLOCKS = 10
+#: tries of a shorter step for one reversal
+ITERATIONS = 3
+#: a crossing within this share of either end of the step is left where the step put it,
+#: and no step is shortened below this share of the step size
+MIN_FRACTION = 0.02
+#: accepted steps after a located reversal before the next is located: contacts that chatter
+#: (a vertex rattling in a corner) reverse in step after step. Over the 84 impacts of
+#: ``tests/stability`` at dt 1e-3, without the wait 977 reversals were located and the runs
+#: took 20,917 steps (an L-shaped block landing on a step at 1,000 E under legacy DDA: 658
+#: in 1,139 steps, against 690 steps when none is located); with it 150 and 19,992
+WAIT = 8
+#: a contact whose normal force at one end of the step is more than this many times the one
+#: at the other is left where the step put it: its slip turned in an impact, where the
+#: normal force, not the friction, decides the motion. Over the 84 impacts of
+#: ``tests/stability`` at dt 1e-3 (both solvers, E/1e4 to 1,000 E) locating every reversal
+#: took the steps from 21,172 to 20,719 and the cut ones from 267 to 328, a block striking a
+#: stopper at 1,000 E under Newton-Raphson from 309 steps to 599, and 1,115 for a block on a
+#: lip (339); with this guard 19,992 and 283 in all, 309 and 340 for those two. The block on
+#: a table at 1.5 g locates the same reversals with it (its vertices' normal forces swap by
+#: some 30 % when the friction turns; 1.25 lost half of them)
+NORMAL_RATIO = 2.0
+
+
+@njit(cache=True)
+def _slip_velocity(x, nxt, centroid, velocity, v, e, bj, bk):
+    """Relative velocity of vertex ``v`` (block ``bj``) and edge ``e`` (block ``bk``) along
+    the edge: ``t . (T_j(x_v) v_j - T_k(x_v) v_k)``."""
+    px, py = x[v, 0], x[v, 1]
+    tx = x[nxt[e], 0] - x[e, 0]
+    ty = x[nxt[e], 1] - x[e, 1]
+    length = np.sqrt(tx * tx + ty * ty)
+    if length == 0.0:
+        return 0.0
+    tx /= length
+    ty /= length
+    u = np.zeros(2)
+    for side in range(2):
+        b = bj if side == 0 else bk
+        sign = 1.0 if side == 0 else -1.0
+        dx = px - centroid[b, 0]
+        dy = py - centroid[b, 1]
+        d = velocity[b]
+        # T(x) d of METHOD.md section 1
+        u[0] += sign * (d[0] - dy * d[2] + dx * d[3] + 0.5 * dy * d[5])
+        u[1] += sign * (d[1] + dx * d[2] + dy * d[4] + 0.5 * dx * d[5])
+    return u[0] * tx + u[1] * ty
+
+
+@njit(cache=True)
+def _earliest_crossing(v0, e0, s0, tn0, bj0, bk0, x0, c0, vel0, v1, e1, s1, tn1, bj1, bk1,
+                       x1, c1, vel1, nxt, slip, open_state, normal_ratio):
+    """The smallest ``w0 / (w0 - w1)`` over the contacts sliding at the start and closed at
+    the end, their normal forces within ``normal_ratio`` of each other, whose slip velocity
+    changed sign; 2.0 when none did."""
+    best = 2.0
+    for i in range(v0.shape[0]):
+        if s0[i] != slip:
+            continue
+        for j in range(v1.shape[0]):
+            if v1[j] != v0[i] or e1[j] != e0[i] or s1[j] == open_state:
+                continue
+            a, b = abs(tn0[i]), abs(tn1[j])
+            if a > normal_ratio * b or b > normal_ratio * a:  # an impact's turn
+                break
+            w0 = _slip_velocity(x0, nxt, c0, vel0, v0[i], e0[i], bj0[i], bk0[i])
+            w1 = _slip_velocity(x1, nxt, c1, vel1, v1[j], e1[j], bj1[j], bk1[j])
+            if w0 * w1 < 0.0:
+                phi = w0 / (w0 - w1)
+                if phi < best:
+                    best = phi
+            break
+    return best
+
+
+def reversal_fraction(nxt: np.ndarray, before, after) -> float | None:
+    """Where in the step from ``before`` to ``after`` (:class:`dda.step.StepState`) the first
+    contact that was sliding at its start reversed its slip velocity, as a share of the
+    step; None when none did.
+
+    Parameters
+    ----------
+    nxt : (n_vertices,) the next vertex of each vertex on its block
+        (:func:`dda.geometry.next_vertex_index`)
+    before, after : the committed state and the step's trial
+    """
+    a, b = before.contacts, after.contacts
+    phi = _earliest_crossing(a.vertex, a.edge, a.state, a.t_n, a.bj, a.bk, before.x,
+                             before.centroid, before.velocity, b.vertex, b.edge, b.state,
+                             b.t_n, b.bj, b.bk, after.x, after.centroid, after.velocity, nxt,
+                             SLIP, OPEN, NORMAL_RATIO)
+    return None if phi > 1.0 else float(phi)
