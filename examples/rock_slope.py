@@ -22,17 +22,20 @@ to the other end, which then yields too. In the short run of the tests (0.5 s pe
 block starts sliding at a total shear-to-normal force ratio of 0.82 instead of tan(40.5) =
 0.854, 8 ms before the rigid block, and keeps the 11 mm/s it gained through the whole slip
 event. Over the 16 s run it slides 9-11% farther per event. With ``onset="face"`` the two
-contacts yield together, as a rigid block does, and the slide follows the rigid block (0.7%).
+contacts yield together, as a rigid block does, and the slide follows the rigid block (0.4%).
 
 The joints' shear dashpot (``JointMaterial.shear_dashpot``, on by default) damps the block's
 vibration on its soft shear springs (10 MN/m, a 12 ms period) after each slide event. Without
 it (``--no-shear-dashpot``, the papers' joints) only Newmark's gamma = 1 damps that vibration,
 strongly at dt 1e-3 and weakly at the paper's dt 1e-4 (``--full``), and the face joint's gap to
-the rigid block is 0.69% at dt 1e-3 but 10.95% at dt 1e-4; with it, 0.70% and 0.30%. The
+the rigid block is 0.42% at dt 1e-3 but 11.0% at dt 1e-4; with it, 0.43% and 0.31% (before
+slip reversals were located within their steps, ``dda.slip_events``: 0.69% and 10.95%, 0.70%
+and 0.30%). The
 per-contact onset is the one joint the dashpot makes worse: it starts a level early (8.25 s
-against the rigid block's 10.22 s, 68.6%), because the two ends share the shear force by their
+against the rigid block's 10.22 s, 68.5%), because the two ends share the shear force by their
 history, which the dashpot changes, and the lightly pressed end then reaches tan(phi_s) at the
-level before (without the dashpot 16.5%, the description above).
+level before (without the dashpot 12.1% at dt 1e-3 and 16.5% at 1e-4, the description
+above).
 
 Each run is compared with a rigid-block Newmark sliding computation with the same friction
 (``dda.studies.references.sliding_block``). The comparison reports the start of sliding and
