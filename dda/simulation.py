@@ -407,7 +407,10 @@ class Simulation:
         full = dt
         least = slip_events.MIN_FRACTION
         for _ in range(slip_events.ITERATIONS):
-            phi = slip_events.reversal_fraction(self._next_vertex, self.committed, trial)
+            phi = slip_events.reversal_fraction(self._next_vertex, self.committed, trial,
+                                                self.velocity_carry)
+            # (and not below that share of the step size asked for: a step control that has
+            # cut far below it is resolving something else)
             if (phi is None or not least < phi < 1.0 - least
                     or phi * dt < least * control.dt):
                 break

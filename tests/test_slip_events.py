@@ -82,9 +82,34 @@ def test_the_crossing_lies_where_the_linear_slip_velocity_is_zero():
     0.3 m/s one way, then 0.1 m/s the other, turned 3/4 of the way through."""
     assert slip_events.reversal_fraction(*_states(0.3, -0.1)) == pytest.approx(0.75)
     assert slip_events.reversal_fraction(*_states(-0.05, 0.15)) == pytest.approx(0.25)
-    # ended sticking the other way: still a reversal; and the earliest of several counts
+    # ended sticking the other way: still a reversal
     assert slip_events.reversal_fraction(*_states(0.3, -0.1, state1=STICK)) == (
         pytest.approx(0.75))
+    # a step that started from half the committed velocities (velocity_carry 0.5)
+    assert slip_events.reversal_fraction(*_states(0.3, -0.1), carry=0.5) == pytest.approx(0.6)
+
+
+def test_the_earliest_of_several_turns_counts_whatever_the_contacts_order():
+    """Two vertices (4 and 5) of the upper square on the lower one's top edge, the square
+    stretching as it turns (``u = u0 + (x - x_c) e_x``): vertex 4's slip turns at 0.3 /
+    (0.3 + 0.15) = 2/3 of the step, vertex 5's at 0.3 / (0.3 + 0.05) = 6/7. The trial lists
+    its contacts in another order, with one more that the start did not have."""
+    nxt, before, after = _states(0.3, -0.1)
+    after.velocity = after.velocity.copy()
+    after.velocity[1, 3] = 0.2  # e_x: u = -0.1 + 0.2 (x - 0.55)
+
+    def contacts(vertices, states):
+        n = len(vertices)
+        return SimpleNamespace(vertex=np.array(vertices), edge=np.full(n, 2),
+                               state=np.array(states, dtype=np.int8),
+                               t_n=np.full(n, -100.0), bj=np.ones(n, dtype=int),
+                               bk=np.zeros(n, dtype=int))
+
+    before.contacts = contacts([4, 5], [SLIP, SLIP])
+    after.contacts = contacts([7, 5, 4], [SLIP, SLIP, SLIP])
+    assert slip_events.reversal_fraction(nxt, before, after) == pytest.approx(2.0 / 3.0)
+    before.contacts = contacts([4, 5], [STICK, SLIP])  # vertex 4 did not slide
+    assert slip_events.reversal_fraction(nxt, before, after) == pytest.approx(6.0 / 7.0)
 
 
 @pytest.mark.parametrize("change, why", [

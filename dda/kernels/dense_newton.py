@@ -45,6 +45,12 @@ __all__ = ["dense_newton", "newton_dense_step", "penalty_round_off", "TANGENT_TE
 
 CONVERGED, NOT_CONVERGED, DIVERGED, SINGULAR, NOT_FINITE, STALLED = 0, 1, 2, 3, 4, 5
 
+#: the most of the forces' scale that :func:`penalty_round_off` may raise Newton's round-off
+#: floor to: far from the origin (a scene in map coordinates) with a stiff penalty the bound
+#: grew to 9% of the forces at 1e6 m (E) and beyond them at 1e5 m (1.5e13 N/m), and Newton
+#: stopped far from balance; the lip impact's stall (2.6e-6 of the forces) stays under it
+PENALTY_FLOOR_CAP = 1e-4
+
 #: the consistent tangent's terms on the rows E, I, S, H, B: p_n E^T E + I^T S + B^T H + H^T B
 #: (:func:`dda.contact.tangent.consistent_tangent`)
 TANGENT_TERMS = np.array([[0, 0], [1, 2], [4, 3], [3, 4]], dtype=np.int64)
@@ -88,7 +94,9 @@ def penalty_round_off(p1, p2, p3, a1, a2, a3, kn, ps):
 
     With a penalty of 1e13 N/m (1,000 E) the floor of a 0.3 m block resting on two
     contacts is some 1e-2 N against forces of 200 N: 5e-5 of them, where ``ROUND_OFF``
-    (1e-6 of the forces) expects the round-off of the system's condition number only.
+    (1e-6 of the forces) expects the round-off of the system's condition number only. A
+    bound, loose by 20-250 times (the points' sizes added, open contacts counted): Newton
+    takes it only up to ``PENALTY_FLOOR_CAP`` of the forces.
 
     Parameters
     ----------
@@ -260,8 +268,9 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
             block_k, d, block_f, free, rigid, bj, bk, residual)
         norm = _norm(r_free)
         scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
-        if (norm <= tol * scale or _at_round_off(norm, norms, n_norms,
-                                                      max(round_off * scale, penalty_floor))
+        if (norm <= tol * scale or _at_round_off(
+                    norm, norms, n_norms, max(round_off * scale,
+                                              min(penalty_floor, PENALTY_FLOOR_CAP * scale)))
                 or (noise_floor and norm <= round_off * scale and norm <= _noise_floor(
                     free, rigid, bj, bk, residual, closed, t_n, t_s, kn, gap_tol))):
             norms[n_norms] = norm

@@ -44,6 +44,7 @@ from dda.kernels.dense_newton import (
     DIVERGED,
     NOT_CONVERGED,
     NOT_FINITE,
+    PENALTY_FLOOR_CAP,
     SINGULAR,
     STALLED,
     dense_newton,
@@ -255,7 +256,8 @@ class NewtonRaphson(NonlinearSolver):
             norm = _norm(r_free)
             scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
             if (norm <= self.tol * scale
-                    or _at_round_off(norms + [norm], max(ROUND_OFF * scale, penalty_floor))
+                    or _at_round_off(norms + [norm], max(
+                        ROUND_OFF * scale, min(penalty_floor, PENALTY_FLOOR_CAP * scale)))
                     or _at_noise_floor(problem, resp, norm, scale)):
                 norms.append(norm)
                 break
