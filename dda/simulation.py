@@ -20,7 +20,6 @@ from dda._checks import finite_number
 from dda.auto_settings import choose
 from dda.contact.contacts import SLIP, STICK
 from dda.errors import SimulationError
-from dda.geometry import next_vertex_index
 from dda.io.checkpoint import (
     CHECKPOINT_VERSION,
     checkpoint_payload,
@@ -178,7 +177,6 @@ class Simulation:
             raise TypeError("Simulation: locate_reversals must be True, False or None (by the "
                             f"scene's size), got {locate_reversals!r}")
         self.locate_reversals = bool(locate_reversals)
-        self._next_vertex = next_vertex_index(self.model.offsets)
         self.choices = ""
         if auto_dt or self.model.joints.auto:
             choice = choose(self.model, solver, self.dt,
@@ -407,7 +405,7 @@ class Simulation:
         full = dt
         least = slip_events.MIN_FRACTION
         for _ in range(slip_events.ITERATIONS):
-            phi = slip_events.reversal_fraction(self._next_vertex, self.committed, trial,
+            phi = slip_events.reversal_fraction(self.model.topo.nxt, self.committed, trial,
                                                 self.velocity_carry)
             # (and not below that share of the step size asked for: a step control that has
             # cut far below it is resolving something else)

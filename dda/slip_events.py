@@ -61,11 +61,12 @@ ITERATIONS = 3
 #: a crossing within this share of either end of the step is left where the step put it,
 #: and no step is shortened below this share of the step size
 MIN_FRACTION = 0.02
-#: accepted steps, the shortened one included, before the next reversal is located: contacts
-#: that chatter (a vertex rattling in a corner) reverse in step after step. Over the 84 impacts of
-#: ``tests/stability`` at dt 1e-3, without the wait 977 reversals were located and the runs
-#: took 20,917 steps (an L-shaped block landing on a step at 1,000 E under legacy DDA: 658
-#: in 1,139 steps, against 690 steps when none is located); with it 150 and 19,992
+#: accepted steps, the shortened one included, before the next reversal is located:
+#: contacts that chatter (a vertex rattling in a corner) reverse in step after step. Over the
+#: 84 impacts of ``tests/stability`` at dt 1e-3, without the wait 977 reversals were located
+#: and the runs took 20,917 steps (an L-shaped block landing on a step at 1,000 E under
+#: legacy DDA: 658 in 1,139 steps, against 690 steps when none is located); with it 150 and
+#: 19,992
 WAIT = 8
 #: a contact whose normal force at one end of the step is more than this many times the one
 #: at the other is left where the step put it: its slip turned in an impact, where the
@@ -91,7 +92,7 @@ def _slip_velocity(x, nxt, centroid, velocity, v, e, bj, bk):
         return 0.0
     tx /= length
     ty /= length
-    u = np.zeros(2)
+    ux = uy = 0.0
     for side in range(2):
         b = bj if side == 0 else bk
         sign = 1.0 if side == 0 else -1.0
@@ -99,9 +100,9 @@ def _slip_velocity(x, nxt, centroid, velocity, v, e, bj, bk):
         dy = py - centroid[b, 1]
         d = velocity[b]
         # T(x) d of METHOD.md section 1
-        u[0] += sign * (d[0] - dy * d[2] + dx * d[3] + 0.5 * dy * d[5])
-        u[1] += sign * (d[1] + dx * d[2] + dy * d[4] + 0.5 * dx * d[5])
-    return u[0] * tx + u[1] * ty
+        ux += sign * (d[0] - dy * d[2] + dx * d[3] + 0.5 * dy * d[5])
+        uy += sign * (d[1] + dx * d[2] + dy * d[4] + 0.5 * dx * d[5])
+    return ux * tx + uy * ty
 
 
 @njit(cache=True)

@@ -40,8 +40,9 @@ from dda.kernels.kinematics import first_variations, pair_increments
 from dda.kernels.open_close import contact_response, step_start
 from dda.kernels.tangent import tangent_rows
 
-__all__ = ["dense_newton", "newton_dense_step", "penalty_round_off", "TANGENT_TERMS", "CONVERGED",
-           "NOT_CONVERGED", "DIVERGED", "SINGULAR", "NOT_FINITE", "STALLED"]
+__all__ = ["dense_newton", "newton_dense_step", "penalty_round_off", "round_off_floor",
+           "TANGENT_TERMS", "CONVERGED", "NOT_CONVERGED", "DIVERGED", "SINGULAR", "NOT_FINITE",
+           "STALLED"]
 
 CONVERGED, NOT_CONVERGED, DIVERGED, SINGULAR, NOT_FINITE, STALLED = 0, 1, 2, 3, 4, 5
 
@@ -121,6 +122,13 @@ def penalty_round_off(p1, p2, p3, a1, a2, a3, kn, ps):
         term = (abs(kn[c]) + abs(ps[c])) * (math.sqrt(da) + math.sqrt(db)) * eps * size
         total += term * term
     return math.sqrt(total)
+
+
+@njit(cache=True)
+def round_off_floor(scale, round_off, penalty_floor):
+    """Newton's round-off floor of |R|: ``round_off`` of the forces' ``scale``, or the
+    contacts' :func:`penalty_round_off` where larger, up to ``PENALTY_FLOOR_CAP`` of them."""
+    return max(round_off * scale, min(penalty_floor, PENALTY_FLOOR_CAP * scale))
 
 
 @njit(cache=True)
@@ -269,8 +277,7 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
         norm = _norm(r_free)
         scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
         if (norm <= tol * scale or _at_round_off(
-                    norm, norms, n_norms, max(round_off * scale,
-                                              min(penalty_floor, PENALTY_FLOOR_CAP * scale)))
+                    norm, norms, n_norms, round_off_floor(scale, round_off, penalty_floor))
                 or (noise_floor and norm <= round_off * scale and norm <= _noise_floor(
                     free, rigid, bj, bk, residual, closed, t_n, t_s, kn, gap_tol))):
             norms[n_norms] = norm

@@ -44,12 +44,12 @@ from dda.kernels.dense_newton import (
     DIVERGED,
     NOT_CONVERGED,
     NOT_FINITE,
-    PENALTY_FLOOR_CAP,
     SINGULAR,
     STALLED,
     dense_newton,
     newton_dense_step,
     penalty_round_off,
+    round_off_floor,
     stalled,
 )
 from dda.kernels.dense_passes import NOT_SETTLED
@@ -256,8 +256,8 @@ class NewtonRaphson(NonlinearSolver):
             norm = _norm(r_free)
             scale = max(force_norm, _norm(inertia_free), _norm(contact_free), 1e-300)
             if (norm <= self.tol * scale
-                    or _at_round_off(norms + [norm], max(
-                        ROUND_OFF * scale, min(penalty_floor, PENALTY_FLOOR_CAP * scale)))
+                    or _at_round_off(norms + [norm],
+                                     round_off_floor(scale, ROUND_OFF, penalty_floor))
                     or _at_noise_floor(problem, resp, norm, scale)):
                 norms.append(norm)
                 break
