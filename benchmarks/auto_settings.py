@@ -43,8 +43,8 @@ HERE = Path(__file__).resolve().parent
 G = 9.81
 #: the moving base's other shakings (g, Hz): from about 1.3 g (1.8 times the friction) the
 #: block slides both ways without sticking between, and each reversal flips its friction force
-AMPLITUDES = ((0.8, 2.0), (0.9, 2.0), (1.3, 2.0), (1.5, 2.0), (1.84, 2.0), (1.0, 1.0),
-              (1.0, 5.0))
+AMPLITUDES = ((0.8, 2.0), (0.9, 2.0), (1.18, 2.0), (1.3, 2.0), (1.47, 2.0), (1.5, 2.0),
+              (1.84, 2.0), (1.0, 1.0), (1.0, 5.0))
 
 
 def moving_base_error(solver: str, dt="auto", penalty="auto", amplitude=G,

@@ -109,7 +109,7 @@ def test_blocks_that_carry_blocks_get_joints_twice_as_stiff_as_their_rock():
     assert dda.Simulation(column(1), dt=1e-3).model.joints.normal_penalty[0] < floor
 
 
-@pytest.mark.parametrize("solver, steps", [(NewtonRaphson(), 300), (LegacyPullBack(), 700)])
+@pytest.mark.parametrize("solver, steps", [(NewtonRaphson(), 300), (LegacyPullBack(), 400)])
 def test_dt_resolves_the_shaking_by_the_solver(solver, steps):
     shake = lambda t: (0.3 * G * np.sin(2 * np.pi * 5.0 * t), 0.0)  # noqa: E731
     sim = dda.Simulation(column(1, shake=shake), dt="auto", solver=solver)
@@ -135,10 +135,10 @@ def _drop(phi_static, phi_dynamic):
 
 
 @pytest.mark.parametrize("solver, phi_dynamic, steps", [
-    (LegacyPullBack(), 20.0, 700 + int(np.ceil(3000.0 * _drop(35.0, 20.0)))),  # 2,141
-    # a drop of 3.7%: 111 more (the form max(700, 5,500 x drop) it replaced gave 700)
-    (LegacyPullBack(), 34.0, 700 + int(np.ceil(3000.0 * _drop(35.0, 34.0)))),
-    (LegacyPullBack(), 35.0, 700),  # no drop
+    (LegacyPullBack(), 20.0, 400 + int(np.ceil(4100.0 * _drop(35.0, 20.0)))),  # 2,370
+    # a drop of 3.7%: 152 more
+    (LegacyPullBack(), 34.0, 400 + int(np.ceil(4100.0 * _drop(35.0, 34.0)))),
+    (LegacyPullBack(), 35.0, 400),  # no drop
     (NewtonRaphson(), 20.0, 300),  # Newton adds none
     (NewtonRaphson(), 35.0, 300)])
 def test_the_steps_a_period_grow_with_the_strength_lost_at_onset(solver, phi_dynamic, steps):
@@ -175,10 +175,10 @@ def test_the_largest_drop_of_the_scene_s_laws_sets_legacy_s_steps():
     sim = dda.Simulation(scene, dt="auto", solver=LegacyPullBack())
     drop, law = largest_onset_drop(sim.model)
     assert law is transition and drop == pytest.approx(transition.onset_drop())
-    assert sim.dt == pytest.approx(1.0 / ((700 + np.ceil(3000.0 * drop)) * 5.0), rel=1e-9)
+    assert sim.dt == pytest.approx(1.0 / ((400 + np.ceil(4100.0 * drop)) * 5.0), rel=1e-9)
     scene.set_joint(JointMaterial("auto", "auto", Softening(35.0, 0.5)))
     sim = dda.Simulation(scene, dt="auto", solver=LegacyPullBack())
-    assert sim.dt == pytest.approx(1.0 / (2200 * 5.0), rel=1e-9)  # 0.5 beats 0.43
+    assert sim.dt == pytest.approx(1.0 / (2450 * 5.0), rel=1e-9)  # 0.5 beats 0.43
     for bad in (1.5, -0.1, float("nan")):
         scene.set_joint(JointMaterial("auto", "auto", Softening(35.0, bad)))
         with pytest.raises(ValueError, match="onset_drop"):
@@ -229,7 +229,7 @@ def test_a_solver_of_ones_own_says_how_many_steps_a_period():
 
     law = JointMaterial("auto", "auto", StaticDynamicTransition(35.0, 20.0))
     sim = dda.Simulation(column(1, law, shake=shake), dt="auto", solver=Blunt())
-    assert sim.dt == pytest.approx(1.0 / 3500.0, rel=1e-9)
+    assert sim.dt == pytest.approx(1.0 / 2000.0, rel=1e-9)
     assert "loses" not in sim.choices
 
 

@@ -48,10 +48,10 @@ class LegacyPullBack(NonlinearSolver):
 
     name = "legacy"
     # explicit friction: the error is first order in dt (dda.auto_settings has the numbers)
-    auto_steps_per_period = 700
+    auto_steps_per_period = 400
     # its onset of slip lags by up to a step: where the strength drops at onset, the slide
     # lost grows with the drop (dda.auto_settings, rule 1)
-    auto_steps_per_drop = 3000.0
+    auto_steps_per_drop = 4100.0
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element
