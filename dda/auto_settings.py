@@ -45,7 +45,7 @@ says what it chose and why. The rule, and the measurements it comes from
           0.28; 0.57 / **0.57** / 0.34%                 0.38; 0.59 / **0.60** / 0.48%
    =====  ============================================  =======================================
 
-   Legacy DDA's error times ``N`` is 30-110% without a drop and 700-1,200% at the drops of
+   Legacy DDA's error times ``N`` is 20-80% without a drop and 450-1,300% at the drops of
    0.15-0.45; ``max(700, 5,500 drop)``, an earlier form, gave 700 steps up to a drop of
    0.127, where it erred about 1%.
 
@@ -63,7 +63,8 @@ says what it chose and why. The rule, and the measurements it comes from
    ends such a step at the reversal (:mod:`dda.slip_events`, scenes of up to 10 free blocks),
    which the numbers here include. With reversals located, the table shaken at 0.8, 0.9, 1,
    1.18, 1.3, 1.47, 1.5 and 1.84 g, each at the base ``N`` and 5% either side, erred at
-   most (the 24 runs; 0.8 g the largest but where named):
+   most (the 24 runs; 0.8 g the largest but where named; ``benchmarks/auto_settings.py
+   --scan``):
 
    =======  ====================================  ===================================
    N        legacy DDA                            Newton
@@ -80,8 +81,8 @@ says what it chose and why. The rule, and the measurements it comes from
    so legacy DDA's base is 400 (700 before reversals were located, where 400 erred 3.2% at
    1.5 g) and Newton's stays 300: the table barely above its friction, whose slip of 1.4 mm
    is the scale, binds it (the stick springs' own give, ``mu g dt^2 / 6``, is 1% of it at
-   150 steps). Legacy's drop term grew from 3,000 to 4,100 to keep the 1,540 steps the rock
-   slope's drop of 0.28 had, where 1,392 erred 0.71% over 16 s.
+   150 steps). Legacy's drop term grew from 3,000 to 4,100 to keep about the 1,540 steps the
+   rock slope's drop of 0.28 had (1,547 now), where 1,392 erred 0.71% over 16 s.
 
    Without shaking (and as a cap with it) a
    block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /
@@ -98,15 +99,18 @@ says what it chose and why. The rule, and the measurements it comes from
    =====  ==============================  ==============================
    N      legacy DDA, kappa 3 / 10 / 30   Newton, kappa 3 / 10 / 30
    =====  ==============================  ==============================
-   75     3.5 / 7.5 / 15.4%               3.5 / 2.9 / 1.2%
-   100    2.3 / 2.6 / 13.1%               0.92 / 0.26 / 0.26%
-   150    0.30 / 0.48 / 0.55%             0.40 / 0.18 / 0.18%
-   200    0.44 / 0.54 / 3.3%              0.20 / 0.12 / 0.23%
-   300    0.13 / 0.17 / 0.81%             0.086 / 0.025 / 0.028%
+   75     2.8 / 2.0 / 2.3%                1.7 / 0.88 / 0.72%
+   100    2.2 / 2.6 / 0.54%               0.95 / 0.27 / 0.14%
+   150    0.30 / 0.48 / 0.33%             0.40 / 0.18 / 0.22%
+   200    0.44 / 0.52 / 0.25%             0.20 / 0.068 / 0.056%
+   300    0.13 / 0.17 / 0.16%             0.086 / 0.025 / 0.025%
    =====  ==============================  ==============================
 
-   Legacy DDA wants the softer springs (its stick is explicit, and a stiff one rings);
-   ``KAPPA`` 3 serves both at the rule's 300 / 400 steps (legacy DDA at 400: 0.090%).
+   Before slip reversals were located legacy DDA wanted the softer springs (kappa 30 erred
+   15.4 / 13.1 / 3.3 / 0.81% at 75 / 100 / 200 / 300 steps: its stick is explicit, and a
+   stiff one rang); with them located the three are within 0.3% of each other from 150
+   steps on. ``KAPPA`` 3 serves both at the rule's 300 / 400 steps (legacy DDA at 400:
+   0.090%).
 3. **No contact sinks deeper than 1% of its half-width under its load**: the penalty is raised
    to ``F / (TARGET_DEPTH h)`` where a block's load ``F`` (per vertex contact, two sharing a
    face) is its weight, the weight of the free blocks above it (each by the share of its
@@ -286,8 +290,8 @@ def steps_for_drop(steps: int, per_drop: float, drop: float) -> int:
 
     Examples
     --------
-    >>> steps_for_drop(700, 3000.0, 0.2797)  # legacy DDA on the rock slope's 40.5 / 31.6
-    1540
+    >>> steps_for_drop(400, 4100.0, 0.2797)  # legacy DDA on the rock slope's 40.5 / 31.6
+    1547
     """
     return int(steps) + max(int(np.ceil(per_drop * drop)), 0)
 
