@@ -264,7 +264,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--runs", type=int, default=40, help="runs per family (40)")
     ap.add_argument("--seed", type=int, default=0)
-    ap.add_argument("--cap", type=float, default=60.0, help="seconds a run may take (60)")
+    # one pile of the default seed takes 57-58 s of CPU alone (legacy DDA, 35 blocks at 5.4e10
+    # N/m and dt 3e-3, its steps cut to 3e-4 s on average), and timed out at 60 s with the test
+    # suite running beside it: a cap is a finding only when a run is far over it
+    ap.add_argument("--cap", type=float, default=120.0, help="seconds a run may take (120)")
     ap.add_argument("--families", nargs="+", choices=list(FAMILIES), default=list(FAMILIES))
     args = ap.parse_args(argv)
     warnings.filterwarnings("ignore")
