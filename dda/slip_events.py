@@ -33,8 +33,9 @@ after step). A step in which a contact stops and sticks counts too: Newmark's en
 ``2 d / dt - v0`` turns its slip velocity to about ``-w0`` whatever the step's length, so
 such a step is shortened to near its middle, up to three times (measured on the
 ``benchmarks/accuracy_cost.py`` grid: 16 of 80 cells more accurate, legacy DDA at 150 steps
-a period 18.8% -> 0.30%; 4 less, Newton at 50 steps a period 0.64-1.03% -> 1.92-3.89%;
-``benchmarks/README.md``).
+a period 18.8% -> 0.30%; 4 less, Newton at 50 steps a period 0.64-1.03% -> 1.92-3.89%,
+where the error jumps with dt: over dt within 10% of those cells its median fell from
+5.4-6.9% to 1.4-2.6%, ``benchmarks/reversal_spread.py``; ``benchmarks/README.md``).
 
 Every step with a sliding contact is checked (a compiled loop, about 1 us for a few
 contacts), and every reversal costs up to :data:`ITERATIONS` more solves of its step. In a
