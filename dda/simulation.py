@@ -406,7 +406,7 @@ class Simulation:
         least = slip_events.MIN_FRACTION
         for _ in range(slip_events.ITERATIONS):
             phi = slip_events.reversal_fraction(self.model.topo.nxt, self.committed, trial,
-                                                self.velocity_carry)
+                                                self.velocity_carry, self.model.free)
             # (and not below that share of the step size asked for: a step control that has
             # cut far below it is resolving something else)
             if (phi is None or not least < phi < 1.0 - least

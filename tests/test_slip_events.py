@@ -90,6 +90,22 @@ def test_the_crossing_lies_where_the_linear_slip_velocity_is_zero():
     assert slip_events.reversal_fraction(*_states(0.3, -0.1), carry=0.5) == pytest.approx(0.6)
 
 
+def test_a_table_whose_motion_is_given_keeps_its_velocity_at_the_start():
+    """``velocity_carry`` scales the free blocks' committed velocities only: the lower
+    square, a table whose motion is given, starts the step at its own 1.0 m/s while the upper
+    one starts at half its 0.4; ``w0`` = 0.2 - 1.0 = -0.8, ``w1`` = 1.6 - 0.8 = 0.8, a turn
+    halfway (scaling the table's too would put it at 0.3 / 1.1 of the step)."""
+    nxt, before, after = _states(0.4, 1.6)
+    before.velocity[0, 0], after.velocity[0, 0] = 1.0, 0.8
+    free = np.array([False, True])
+    assert slip_events.reversal_fraction(nxt, before, after, carry=0.5, free=free) == (
+        pytest.approx(0.5))
+    assert slip_events.reversal_fraction(nxt, before, after, carry=0.5) == (
+        pytest.approx(0.3 / 1.1))
+    assert slip_events.reversal_fraction(nxt, before, after, free=free) == (
+        pytest.approx(0.6 / 1.4))
+
+
 def test_the_earliest_of_several_turns_counts_whatever_the_contacts_order():
     """Two vertices (4 and 5) of the upper square on the lower one's top edge, the square
     stretching as it turns (``u = u0 + (x - x_c) e_x``): vertex 4's slip turns at 0.3 /
@@ -111,6 +127,64 @@ def test_the_earliest_of_several_turns_counts_whatever_the_contacts_order():
     assert slip_events.reversal_fraction(nxt, before, after) == pytest.approx(2.0 / 3.0)
     before.contacts = contacts([4, 5], [STICK, SLIP])  # vertex 4 did not slide
     assert slip_events.reversal_fraction(nxt, before, after) == pytest.approx(6.0 / 7.0)
+
+
+def test_the_matching_of_contacts_agrees_with_a_search_of_every_pair():
+    """Start and trial contacts matched by vertex and edge (sorted and merged) give the
+    crossing that trying every pair gives: random contact lists of the two squares, in random
+    order, some pairs only at one end, some open, some with an impact's normal force."""
+    x, nxt, centroid = _two_squares()
+    rng = np.random.default_rng(11)
+    pairs = [(v, e) for v in range(8) for e in range(8)]
+
+    def contacts(chosen, states, t_n):
+        v, e = np.array([pairs[c] for c in chosen]).T
+        n = len(chosen)
+        return SimpleNamespace(vertex=v, edge=e, state=np.array(states, dtype=np.int8),
+                               t_n=np.array(t_n), bj=np.ones(n, dtype=int),
+                               bk=np.zeros(n, dtype=int))
+
+    def every_pair(before, after):
+        best = None
+        a, b = before.contacts, after.contacts
+        for i in range(len(a.vertex)):
+            if a.state[i] != SLIP:
+                continue
+            for j in range(len(b.vertex)):
+                if (b.vertex[j], b.edge[j]) != (a.vertex[i], a.edge[i]) or b.state[j] == OPEN:
+                    continue
+                ratio = abs(a.t_n[i]) / abs(b.t_n[j])
+                if 0.5 <= ratio <= 2.0:
+                    w0 = slip_events._slip_velocity(x, nxt, centroid, before.velocity,
+                                                    a.vertex[i], a.edge[i], 1, 0)
+                    w1 = slip_events._slip_velocity(x, nxt, centroid, after.velocity,
+                                                    b.vertex[j], b.edge[j], 1, 0)
+                    if w0 * w1 < 0.0 and (best is None or w0 / (w0 - w1) < best):
+                        best = w0 / (w0 - w1)
+                break
+        return best
+
+    found = 0
+    for _ in range(200):
+        m0, m1 = rng.integers(1, 30, size=2)
+        start = rng.choice(64, size=m0, replace=False)
+        end = rng.permutation(np.concatenate([rng.choice(start, size=min(m0, m1)),
+                                              rng.choice(64, size=m1)]))
+        before = SimpleNamespace(
+            x=x, centroid=centroid, velocity=rng.normal(size=(2, 6)),
+            contacts=contacts(start, rng.integers(0, 3, size=m0), -rng.uniform(1, 3, m0)))
+        after = SimpleNamespace(
+            x=x, centroid=centroid, velocity=rng.normal(size=(2, 6)),
+            contacts=contacts(end, rng.integers(0, 3, size=len(end)),
+                              -rng.uniform(1, 3, len(end))))
+        expected = every_pair(before, after)
+        got = slip_events.reversal_fraction(nxt, before, after)
+        if expected is None or expected > 1.0:
+            assert got is None
+        else:
+            found += 1
+            assert got == pytest.approx(expected, rel=1e-14)
+    assert found >= 50
 
 
 @pytest.mark.parametrize("change, why", [
