@@ -187,7 +187,8 @@ class Simulation:
                 self.model.joints = self.model.joints.with_penalties(choice.normal_penalty,
                                                                      choice.shear_penalty)
             self.choices = choice.text
-        check_time_step(self.model, self.dt)
+        if analysis == "dynamic":  # a static step solves for equilibrium: no period
+            check_time_step(self.model, self.dt)
         self.committed = StepState.initial(self.model)
         self.control = StepControl(self.dt)
         self.advisor = PenaltyAdvisor(self.model, self.dt)

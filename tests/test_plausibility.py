@@ -81,6 +81,15 @@ def test_a_step_that_skips_a_hundred_contact_periods():
     assert caught(lambda: dda.Simulation(_small_block_scene(), dt=1e-4))[0] == []
 
 
+def test_a_static_analysis_has_no_contact_period():
+    """A static step solves for equilibrium (no velocity carried): a long step is what it is
+    for, and the pebble's 20 steps of 1,000 periods each settle without a cut."""
+    got, result = caught(lambda: dda.Simulation(_small_block_scene(), dt=0.05,
+                                                analysis="static").run(1.0, progress=False))
+    assert got == []
+    assert len(result.time) == 21 and result.stats.cuts == []
+
+
 def test_warnings_never_stop_a_run():
     def run():
         rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)

@@ -42,9 +42,10 @@ for the smallest free block::
     dynamic:  T = sqrt(8 d_min / (3 a_min)),    dt = T / N   (N = 200 steps)
 
 so that for a block creeping at a steady rate (1) and (2) are the same test. A static ``dt``
-is not a time step of any motion, but the simulation warns above 100 contact periods
-(:func:`dda.plausibility.check_time_step`), so it is capped at 50 periods of the lightest
-free block on the stiffest joint; test (2) keeps the resolution. On the two toppling columns
+is not a time step of any motion; it is capped at 50 periods of the lightest free block on
+the stiffest joint, half the bound above which a dynamic simulation warns
+(:func:`dda.plausibility.check_time_step`), so that the two analyses' trials are alike in
+their steps; test (2) keeps the resolution. On the two toppling columns
 of the tests (1 m blocks, 10 GN/m) that is 40 steps of 0.157 s instead of 0.319 s: the same
 factor (1.298).
 
@@ -270,9 +271,10 @@ def analysis_for(analysis: str, solver) -> str:
 def _step_cap(model, dt: float) -> float:
     """The longest static step: ``DT_PERIODS / 2`` contact periods ``2 pi sqrt(m / p)`` of
     the lightest free block on the stiffest joint (:func:`dda.plausibility.check_time_step`
-    warns at ``DT_PERIODS``). An "auto" penalty is the one the simulation would choose at
-    ``dt`` (:func:`dda.auto_settings.choose`; at the capped step its inertia rule, ``6 m /
-    dt^2``, comes to ``6 / (100 pi)^2`` of that penalty, so the choice stands)."""
+    warns at ``DT_PERIODS`` in a dynamic analysis). An "auto" penalty is the one the
+    simulation would choose at ``dt`` (:func:`dda.auto_settings.choose`; at the capped step
+    its inertia rule, ``6 m / dt^2``, comes to ``6 / (100 pi)^2`` of that penalty, so the
+    choice stands)."""
     penalties = np.asarray(model.joints.normal_penalty, dtype=float)
     if np.isnan(penalties).any():
         from dda.auto_settings import choose
