@@ -18,7 +18,11 @@ Writes:
 - ``OUT/barton_shear.csv``: the plotted numbers;
 - ``OUT/barton_1MPa_*.vtu`` and ``OUT/barton_1MPa.pvd``: the 1 MPa Newton-Raphson run.
 
-It also prints each run's peak against the formula.
+It also prints each run's peak against the formula (within 0.5%) and the largest gap of its
+curve to Barton's (0.01-0.03%, but 26% for legacy DDA at 2 MPa: before the peak its contacts
+stick a step at a time, each stick step's stress below the strength the slip so far would
+mobilize, so the curve climbs in stairs under Barton's; the fully implicit method judges
+the strength at the step's end and follows it).
 
 Run:  python examples/barton_direct_shear.py [--out DIR] [--steps N] [--full]
 """

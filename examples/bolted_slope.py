@@ -8,9 +8,10 @@ Three factors of safety, each by strength reduction of every joint (``tan(phi) /
 :func:`dda.studies.strength_reduction`):
 
 1. dry: planar sliding on the bedding, ``F = tan 35 / tan 25 = 1.50``, found within 1%;
-2. with a water table after heavy rain (from the toe up to 1 m below the crest at the back
-   wall): the pressure in the joints (:meth:`dda.Scene.set_water_table`) lifts the blocks
-   off their bedding and F falls below 1.3;
+2. with a water table after heavy rain (from the toe up to 1.6 m below the crest where the
+   mass meets the back wall, 1 m below it behind the wall): the pressure in the joints
+   (:meth:`dda.Scene.set_water_table`) lifts the blocks off their bedding and F falls below
+   1.3;
 3. wet and bolted: a pattern of fully grouted rock bolts (:meth:`dda.Scene.add_bolt`), each
    from a point near the top of a block at the surface straight down into the block below
    the bedding plane under it, ties the blocks that slide to those that stay; F rises above
@@ -45,7 +46,8 @@ import jointed_slope as SLOPE  # noqa: E402  (the cut's joint sets, rock and joi
 
 #: the 8 m slope: toe, base of the back wall, its top, crest (m)
 MASS = [(0.4 * x, 0.4 * y) for x, y in SLOPE.MASS]
-#: after heavy rain: dry at the toe, 1 m below the crest at the back wall (m)
+#: after heavy rain: dry at the toe, 1.6 m below the crest at the wall's face (x = 24 m) and
+#: 1 m below it at x = 28 m (m)
 WATER_TABLE = [(0.0, 0.0), (8.0, 0.0), (12.0, 4.5), (28.0, 7.0)]
 #: the bolts: spacing along the top surface and the face (m), length below the bedding plane
 #: they cross (m), axial stiffness (N/m per m of slope; a 25 mm bar at 1.5 m spacing in

@@ -99,8 +99,12 @@ def plot(runs: list[dict], duration: float, path: Path):
                 ax.plot(run["time"], 1e3 * run["slip"], color=f"C{k}", lw=1.0, label=label)
             ax.plot(t, 1e3 * ref.slip, "k--", lw=1.2, label="analytical")
             ax.set_title(f"{solver}, dt = {dt:g} s", fontsize=10)
-            deepest = 1e3 * ref.slip.min()  # blown-up legacy runs are clipped
-            ax.set_ylim(2.4 * deepest, -0.6 * deepest)
+            # the runs' own range, padded; a blown-up legacy run is clipped
+            deepest = 1e3 * ref.slip.min()
+            low = min([deepest] + [1e3 * r["slip"].min() for r in runs])
+            high = max([0.0] + [1e3 * r["slip"].max() for r in runs])
+            pad = 0.1 * (high - low)
+            ax.set_ylim(max(low - pad, 2.4 * deepest), min(high + pad, -0.6 * deepest))
             ax.grid(alpha=0.3)
             if i == 1:
                 ax.set_xlabel("time (s)")

@@ -17,13 +17,13 @@ file in the output folder and read back as any record is.
 The example cuts a smaller slope by default, the same section scaled to 8 m high, so that
 it runs in seconds; ``--full`` shakes the 20 m slope of ``jointed_slope.py``. With the
 defaults (the synthetic 4 s record at 100 Hz, 0.3 g, legacy DDA, dt 2e-3 s asked for) it cuts
-62 blocks (17 on the face) and takes 8 to 11 s (2,196 steps, 20 cut, 2.3 OPEN-CLOSE passes a step);
+62 blocks (17 on the face) and takes 8 to 11 s (2,044 steps, 6 cut, 1.8 OPEN-CLOSE passes a step);
 the face blocks slip about 3 mm during the 0.3 g pulse at 0.5 s and a little more at 1.1 s,
-and end 3.3 mm (median) and 3.7 mm (most) from where they started relative to the base,
+and end 3.2 mm (median) and 3.6 mm (most) from where they started relative to the base,
 which ends 4.7 mm from its start (the record's own displacement, 4.69 mm: the synthetic
 record ends at rest but not where it started). With ``--full``: 311 blocks (39 on the face),
-1.8 minutes (3,370 steps, 68 cut, 5.2 passes a step), the face 5.2 / 6.9 mm. (Wall times on
-the machine of issue 22, two cores shared by four jobs.)
+50 s (2,507 steps, 36 cut, 4.3 passes a step), the face 5.2 / 6.7 mm (1.8 minutes on the
+machine of issue 22, two cores shared by four jobs).
 
 Writes ``OUT/synthetic.AT2`` (without ``--record``), ``OUT/slope_*.vtu`` + ``OUT/slope.pvd``
 and ``OUT/record.png`` (the record, the table's displacement, and how far the face moved),

@@ -34,7 +34,8 @@ and 0.30%). The
 per-contact onset is the one joint the dashpot makes worse: it starts a level early (8.25 s
 against the rigid block's 10.22 s, 68.5%), because the two ends share the shear force by their
 history, which the dashpot changes, and the lightly pressed end then reaches tan(phi_s) at the
-level before (without the dashpot 12.1% at dt 1e-3 and 16.5% at 1e-4, the description
+level before (without the dashpot 12.1% at dt 1e-3, where it starts at 10.221 s with the
+rigid block, and 16.5% at 1e-4, where a few mm slip at 8.25 s already: the description
 above).
 
 Each run is compared with a rigid-block Newmark sliding computation with the same friction

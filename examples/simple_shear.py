@@ -66,8 +66,10 @@ def plot(runs: list[dict], path: Path):
     for k, r in enumerate(runs):
         ax.plot(1e3 * r["imposed"], 1e-3 * r["tau"], "-o" if k == 0 else "--", ms=2.5,
                 color=f"C{k}", label=f"{r['solver']} ({r['steps']} steps)")
-    ax.axhline(STATIC / 1e3, color="k", ls=":", lw=1, label="tan 30 x 1 MPa = 577.3 kPa")
-    ax.axhline(DYNAMIC / 1e3, color="0.4", ls="-.", lw=1, label="tan 20 x 1 MPa = 364.0 kPa")
+    ax.axhline(STATIC / 1e3, color="k", ls=":", lw=1,
+               label=f"tan 30 x 1 MPa = {STATIC / 1e3:.1f} kPa")
+    ax.axhline(DYNAMIC / 1e3, color="0.4", ls="-.", lw=1,
+               label=f"tan 20 x 1 MPa = {DYNAMIC / 1e3:.1f} kPa")
     ax.set_xlabel("imposed shear displacement (mm)")
     ax.set_ylabel("shear stress (kPa)")
     ax.set_title("Simple shear, phi_s 30 / phi_d 20", fontsize=10)

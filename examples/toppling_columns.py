@@ -9,7 +9,7 @@ hand. Each round's trials run in parallel on a process pool, one worker a core.
 
 Measured (Newton, static trials): two columns 1.298 against 1.3034 (-0.40%; legacy DDA,
 dynamic trials, the same), four columns 1.860 against 1.8444 (+0.83%), each search 10-12
-trials of 10-50 ms.
+trials of 10-20 ms (the first two about 0.2 s: they load the compiled kernels).
 
 Writes ``OUT/fos.png`` (the failing columns in red, the trials' movement against F) and
 ``OUT/trials.csv``.

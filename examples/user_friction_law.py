@@ -2,7 +2,7 @@
 from a scene file.
 
 The law is ``examples/my_laws.py``: Coulomb friction whose cohesion breaks at the first slip
-(``BrittleCohesion``, 22 lines of class). The scene: a 1 m x 0.5 m block on a 35-degree
+(``BrittleCohesion``, 23 lines of class). The scene: a 1 m x 0.5 m block on a 35-degree
 incline (phi 30 degrees, cohesion 5 kPa), kicked down the incline at 0.5 m/s.
 
 - With ``CoulombSingle(phi=30, cohesion=5e3)`` the cohesion stays: friction and cohesion
