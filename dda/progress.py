@@ -19,15 +19,18 @@ class ProgressBar:
     :class:`dda.result.StepStats`, optional) gives the cuts.
 
     Call it with the committed :class:`dda.step.StepState` and its report after every step;
-    ``close()`` ends the line.
+    ``close()`` ends the line. ``note`` is shown beside the bar until the first step is done
+    (the first run of an install, which compiles the kernels first, says so).
     """
 
-    def __init__(self, t_end, t_start, stats=None, file=None):
+    def __init__(self, t_end, t_start, stats=None, file=None, note: str = ""):
         self.t_end, self.t_start, self.stats = t_end, t_start, stats
         self.last_time = t_start
         self.passes = self.steps = 0
+        self.note = note
         self.bar = tqdm(total=t_end - t_start, initial=0.0, unit="s", unit_scale=False,
-                        file=file or sys.stderr, desc="t", mininterval=0.2, leave=True,
+                        file=file or sys.stderr, desc=f"t ({note})" if note else "t",
+                        mininterval=0.2, leave=True,
                         bar_format="{desc} {n:.4f}/{total:.4f} s |{bar}| {percentage:3.0f}% "
                                    "[{elapsed}<{remaining}{postfix}]")
 
@@ -35,6 +38,9 @@ class ProgressBar:
         dt = state.time - self.last_time
         self.last_time = state.time
         self.steps += 1
+        if self.note:
+            self.note = ""
+            self.bar.set_description_str("t", refresh=False)
         if report is not None:
             self.passes += report.open_close_passes
         self.bar.set_postfix_str(

@@ -26,6 +26,7 @@ from dda.io.checkpoint import (
     read_checkpoint,
     write_checkpoint,
 )
+from dda.kernels.cache import cold_kernel_cache
 from dda.model import Model
 from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning
 from dda.plausibility import PlausibilityWarning, check_time_step
@@ -314,7 +315,10 @@ class Simulation:
         if progress is None:
             steps = (t_end - self.committed.time) / self.dt
             progress = steps > 2000 and sys.stderr.isatty()
-        return ProgressBar(t_end, self.committed.time, stats) if progress else None
+        if not progress:
+            return None
+        note = "compiling the kernels first, once: a minute or two" if cold_kernel_cache() else ""
+        return ProgressBar(t_end, self.committed.time, stats, note=note)
 
     def _steps(self, result, t_end, recorder, writer, checkpoint, watchers, interrupts):
         """Step to ``t_end``: commit, record, checkpoint and tell the watchers each step; stop

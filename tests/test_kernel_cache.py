@@ -42,3 +42,36 @@ def test_fresh_caches_and_changes_without_kernels_are_kept(tmp_path):
 def test_no_cache_no_work(tmp_path):
     (tmp_path / "k.py").write_text("@njit\n")
     assert drop_stale_kernel_caches(tmp_path) == 0
+
+
+def test_a_cold_cache_is_one_without_an_index_beside_the_sources(tmp_path, monkeypatch):
+    """The first run of an install compiles the kernels; the progress bar says so then."""
+    from dda.kernels.cache import cold_kernel_cache
+
+    monkeypatch.delenv("NUMBA_CACHE_DIR", raising=False)
+    root, cache = _package(tmp_path, kernel_age=100, plain_age=100, index_age=50)
+    assert not cold_kernel_cache(root)
+    drop_stale_kernel_caches(root)  # nothing stale: kept
+    for p in cache.glob("*.nb*"):
+        p.unlink()
+    assert cold_kernel_cache(root)
+    # a cache kept elsewhere cannot be told: no claim
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "elsewhere"))
+    assert not cold_kernel_cache(root)
+
+
+def test_the_progress_bar_shows_its_note_until_the_first_step():
+    import io
+    from types import SimpleNamespace
+
+    from dda.progress import ProgressBar
+
+    out = io.StringIO()
+    bar = ProgressBar(1.0, 0.0, file=out, note="compiling the kernels first")
+    bar.bar.refresh()
+    assert "compiling the kernels first" in out.getvalue()
+    bar(SimpleNamespace(time=0.5))
+    bar.bar.refresh()
+    bar.close()
+    assert "compiling" not in out.getvalue().rsplit("\r", 1)[-1]
+    assert "0.5000/1.0000" in out.getvalue()

@@ -12,9 +12,10 @@ nothing; only a working tree being edited pays the recompilation.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
-__all__ = ["drop_stale_kernel_caches"]
+__all__ = ["cold_kernel_cache", "drop_stale_kernel_caches"]
 
 _CACHE_SUFFIXES = (".nbi", ".nbc")
 
@@ -41,3 +42,18 @@ def drop_stale_kernel_caches(package: Path | None = None) -> int:
         return removed
     except OSError:  # a read-only installation: numba keeps its cache elsewhere
         return 0
+
+
+def cold_kernel_cache(package: Path | None = None) -> bool:
+    """Whether the kernels will compile on this run: numba keeps its cache beside the sources
+    of ``package`` (default: this package; no ``NUMBA_CACHE_DIR``, a folder it may write) and
+    holds no cache index there yet (a fresh install, or one whose cache
+    :func:`drop_stale_kernel_caches` just dropped). Where the cache lives elsewhere the answer
+    is False: it cannot be told."""
+    root = Path(__file__).resolve().parents[1] if package is None else Path(package)
+    if os.environ.get("NUMBA_CACHE_DIR") or not os.access(root, os.W_OK):
+        return False
+    try:
+        return next(root.rglob("__pycache__/*.nbi"), None) is None
+    except OSError:
+        return False
