@@ -4,9 +4,10 @@
 >>> scene = dda.Scene(gravity=9.81)
 """
 
-from dda.kernels.cache import drop_stale_kernel_caches
+from dda.kernels import cache as _kernel_cache
 
-drop_stale_kernel_caches()  # before any kernel loads its compiled code (dda/kernels/cache.py)
+_kernel_cache.drop_stale_kernel_caches()  # before any kernel loads its compiled code
+_kernel_cache.COLD = _kernel_cache.cold_kernel_cache()  # this process will compile them
 
 from dda import io  # noqa: E402
 from dda.errors import OverlapError  # noqa: E402

@@ -8,10 +8,14 @@ and solves a step (over the last update).
 from __future__ import annotations
 
 import sys
+import time
 
 from tqdm import tqdm
 
 __all__ = ["ProgressBar"]
+
+#: seconds between two steps below which a note on the first steps' slowness is dropped
+NOTE_UNTIL = 1.0
 
 
 class ProgressBar:
@@ -19,8 +23,10 @@ class ProgressBar:
     :class:`dda.result.StepStats`, optional) gives the cuts.
 
     Call it with the committed :class:`dda.step.StepState` and its report after every step;
-    ``close()`` ends the line. ``note`` is shown beside the bar until the first step is done
-    (the first run of an install, which compiles the kernels first, says so).
+    ``close()`` ends the line. ``note`` is shown beside the bar until two steps come within
+    ``NOTE_UNTIL`` s of each other (the first run of an install, which compiles the kernels
+    as its first steps call them, says so: the README demo's first two steps took 47 and
+    22 s on a fresh clone).
     """
 
     def __init__(self, t_end, t_start, stats=None, file=None, note: str = ""):
@@ -28,6 +34,7 @@ class ProgressBar:
         self.last_time = t_start
         self.passes = self.steps = 0
         self.note = note
+        self.last_call = time.perf_counter()
         self.bar = tqdm(total=t_end - t_start, initial=0.0, unit="s", unit_scale=False,
                         file=file or sys.stderr, desc=f"t ({note})" if note else "t",
                         mininterval=0.2, leave=True,
@@ -39,8 +46,11 @@ class ProgressBar:
         self.last_time = state.time
         self.steps += 1
         if self.note:
-            self.note = ""
-            self.bar.set_description_str("t", refresh=False)
+            now = time.perf_counter()
+            if now - self.last_call < NOTE_UNTIL:
+                self.note = ""
+                self.bar.set_description_str("t", refresh=False)
+            self.last_call = now
         if report is not None:
             self.passes += report.open_close_passes
         self.bar.set_postfix_str(

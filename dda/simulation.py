@@ -26,7 +26,7 @@ from dda.io.checkpoint import (
     read_checkpoint,
     write_checkpoint,
 )
-from dda.kernels.cache import cold_kernel_cache
+from dda.kernels import cache as kernel_cache
 from dda.model import Model
 from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning
 from dda.plausibility import PlausibilityWarning, check_time_step
@@ -317,7 +317,10 @@ class Simulation:
             progress = steps > 2000 and sys.stderr.isatty()
         if not progress:
             return None
-        note = "compiling the kernels first, once: a minute or two" if cold_kernel_cache() else ""
+        note = ""
+        if kernel_cache.COLD:  # the first run of an install: numba compiles as it goes
+            kernel_cache.COLD = False
+            note = "compiling the kernels first, once: a minute or two"
         return ProgressBar(t_end, self.committed.time, stats, note=note)
 
     def _steps(self, result, t_end, recorder, writer, checkpoint, watchers, interrupts):

@@ -70,7 +70,11 @@ def test_the_progress_bar_shows_its_note_until_the_first_step():
     bar = ProgressBar(1.0, 0.0, file=out, note="compiling the kernels first")
     bar.bar.refresh()
     assert "compiling the kernels first" in out.getvalue()
-    bar(SimpleNamespace(time=0.5))
+    bar.last_call -= 5.0  # a first step that took 5 s: still compiling, maybe
+    bar(SimpleNamespace(time=0.25))
+    bar.bar.refresh()
+    assert "compiling" in out.getvalue().rsplit("\r", 1)[-1]
+    bar(SimpleNamespace(time=0.5))  # the next one at once: compiled
     bar.bar.refresh()
     bar.close()
     assert "compiling" not in out.getvalue().rsplit("\r", 1)[-1]

@@ -18,6 +18,9 @@ from pathlib import Path
 __all__ = ["cold_kernel_cache", "drop_stale_kernel_caches"]
 
 _CACHE_SUFFIXES = (".nbi", ".nbc")
+#: whether the kernels' cache was cold when ``dda`` was imported (set there; the first progress
+#: bar of the process says that it compiles them, and clears it)
+COLD = False
 
 
 def drop_stale_kernel_caches(package: Path | None = None) -> int:
