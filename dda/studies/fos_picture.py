@@ -2,8 +2,10 @@
 
 Left: the scene, its failing blocks (at the smallest failed factor) in red, the other free
 blocks light, the fixed and driven ones dark. Right: every trial's movement (the largest
-criterion ratio: 1 or more is failed) against F (movement on a log scale), stable trials as circles,
-failed ones as crosses, the final bracket shaded and F marked.
+criterion ratio: 1 or more is failed) against F (movement on a log scale), stable trials as
+circles, failed ones as crosses (each at the step that stopped it: a trial ends once its
+failure is certain, so a weaker joint may show less movement), the final bracket shaded and F
+marked.
 """
 
 from __future__ import annotations
@@ -58,7 +60,8 @@ def picture(fos, path=None):
     ax1.plot(f[~ok], m[~ok], "x", color="tab:red", label="failed")
     ax1.set_yscale("log")
     ax1.set_xlabel("F (joint strength divided by F)")
-    ax1.set_ylabel("movement / threshold")
+    # a failed trial stops once its failure is certain: its movement is the one at that step
+    ax1.set_ylabel("movement / threshold (failed: when stopped)")
     ax1.set_title(f"{len(fos.trials)} trials, {fos.plan.analysis}", fontsize="medium")
     ax1.legend(fontsize="small")
     fig.tight_layout()
