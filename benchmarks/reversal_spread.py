@@ -30,10 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from dda import Simulation
-from dda.studies.cases import moving_base, relative_slip
-from dda.studies.studies import MovingBase, _moving_base_reference
-from dda.studies.sweep import make_solver
+from dda.studies.studies import MovingBase
 
 STEPS = (1e-2, 3e-3, 1e-3, 3e-4, 1e-4)
 PENALTIES = (2e7, 2e8, 2e9, 2e10)
@@ -45,16 +42,11 @@ HERE = Path(__file__).resolve().parent
 def error(job):
     """The moving base's relative error for ``(solver, dt, penalty, locate)``."""
     solver, dt, penalty, locate = job
-    study = MovingBase()
-    scene, base, block = moving_base(penalty, study.phi, study.amplitude, study.freq)
-    sim = Simulation(scene, dt=dt, solver=make_solver(solver), locate_reversals=locate)
+    sim, duration, measure = MovingBase().prepare(solver, dt, penalty)
+    sim.locate_reversals = locate
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the penalty advice of the stiff cells
-        result = sim.run(study.duration)
-    times, ref = _moving_base_reference(study.duration, study.phi, study.amplitude,
-                                        study.freq)
-    slip = relative_slip(result, base, block)
-    return np.abs(slip - np.interp(result.time, times, ref)).max() / np.abs(ref).max()
+        return measure(sim.run(duration, progress=False))["error"]
 
 
 def table(errors, steps):

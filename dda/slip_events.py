@@ -165,9 +165,8 @@ def reversal_fraction(nxt: np.ndarray, before, after, carry: float = 1.0,
     """
     a, b = before.contacts, after.contacts
     start = before.velocity
-    if carry != 1.0:
-        scale = np.full(len(start), float(carry)) if free is None else np.where(free, carry,
-                                                                                 1.0)
+    if carry != 1.0:  # the free blocks' share; a block whose motion is given keeps its own
+        scale = np.full(len(start), carry) if free is None else np.where(free, carry, 1.0)
         start = start * scale[:, None]
     phi = _earliest_crossing(a.vertex, a.edge, a.state, a.t_n, a.bj, a.bk, before.x,
                              before.centroid, start, b.vertex, b.edge, b.state, b.t_n, b.bj,

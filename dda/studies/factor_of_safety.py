@@ -44,8 +44,8 @@ for the smallest free block::
 so that for a block creeping at a steady rate (1) and (2) are the same test. A static ``dt``
 is not a time step of any motion; it is capped at 50 periods of the lightest free block on
 the stiffest joint, half the bound above which a dynamic simulation warns
-(:func:`dda.plausibility.check_time_step`), so that the two analyses' trials are alike in
-their steps; test (2) keeps the resolution. On the two toppling columns
+(:func:`dda.plausibility.check_time_step`; the cap came when static steps were warned about
+too, and was kept); test (2) keeps the resolution. On the two toppling columns
 of the tests (1 m blocks, 10 GN/m) that is 40 steps of 0.157 s instead of 0.319 s: the same
 factor (1.298).
 
