@@ -26,8 +26,9 @@ step is committed; the step control's size is unchanged, so the next step is as 
 before. With it the table at 1.5 g erred 0.18-0.20% (Newton) and 0.10-0.27% (legacy DDA, at
 its 700 steps a period then) over the same dt.
 
-A contact whose normal force changes more than :data:`NORMAL_RATIO` times in the step
-turned in an impact, not by its friction, and is left alone; after a located reversal the
+A contact whose pair of blocks' normal force (summed over the pair's closed contacts)
+changes more than :data:`NORMAL_RATIO` times in the step turned in an impact, not by its
+friction, and is left alone; after a located reversal the
 next :data:`WAIT` steps are not shortened (a vertex rattling in a corner reverses in step
 after step). A step in which a contact stops and sticks counts too: Newmark's end velocity
 ``2 d / dt - v0`` turns its slip velocity to about ``-w0`` whatever the step's length, so
@@ -69,15 +70,26 @@ MIN_FRACTION = 0.02
 #: legacy DDA: 658 in 1,139 steps, against 690 steps when none is located); with it 150 and
 #: 19,992
 WAIT = 8
-#: a contact whose normal force at one end of the step is more than this many times the one
-#: at the other is left where the step put it: its slip turned in an impact, where the
-#: normal force, not the friction, decides the motion. Over the 84 impacts of
-#: ``tests/stability`` at dt 1e-3 (both solvers, E/1e4 to 1,000 E) locating every reversal
-#: took the steps from 21,172 to 20,719 and the cut ones from 267 to 328, a block striking a
-#: stopper at 1,000 E under Newton-Raphson from 309 steps to 599, and 1,115 for a block on a
-#: lip (339); with this guard 19,992 and 283 in all, 309 and 340 for those two. The block on
-#: a table at 1.5 g locates the same reversals with it (its vertices' normal forces swap by
-#: some 30 % when the friction turns; 1.25 lost half of them)
+#: a contact whose pair of blocks carries, summed over the pair's closed contacts, a normal
+#: force at one end of the step more than this many times the one at the other is left where
+#: the step put it: its slip turned in an impact, where the normal force, not the friction,
+#: decides the motion. Over the 84 impacts of ``tests/stability`` at dt 1e-3 (both solvers,
+#: E/1e4 to 1,000 E) locating every reversal took the steps from 21,172 to 20,719 and the cut
+#: ones from 267 to 328, a block striking a stopper at 1,000 E under Newton-Raphson from 309
+#: steps to 599, and 1,115 for a block on a lip (339); with this guard on each contact's own
+#: force 19,992 and 283 in all, 309 and 340 for those two. The pair's sum, not each
+#: contact's force: when the friction under a block turns, its moment moves the weight from
+#: one vertex to the other, by some 30% at a soft penalty but by up to the rigid block's
+#: whole swap (749 / 113 N to 318 / 545 N a step on the table at 1.5 g with ten times the
+#: inertia as penalty) where the springs are stiff, and a guard on each contact missed one
+#: reversal in three there (at 2e8 N/m and dt 3e-3 s, 2e9 and 2e10 at dt 1/600 s; its turn
+#: then fell 0.27-1.0% of the peak slip velocity inside a step; now all, within 0.17%).
+#: The pair's sum barely moves when the friction turns. Over the 56 impact runs of
+#: ``tests/stability`` at dt 1e-3 (7 scenes, E/1e4 to 1,000 E, both solvers) it took 21,207
+#: steps, 266 cut and 141 reversals located, against 19,936, 283 and 150 with the guard on
+#: each contact: 1,262 of the 1,271 steps more are the lip at 1,000 E under legacy DDA,
+#: whose path takes 631-2,863 steps with dt within 3% and no reversal located (2,863 at
+#: 1e-3 s, as with the pair's sum; 1,601 with the guard on each contact)
 NORMAL_RATIO = 2.0
 
 
@@ -107,11 +119,46 @@ def _slip_velocity(x, nxt, centroid, velocity, v, e, bj, bk):
 
 
 @njit(cache=True)
+def _pair_normal_forces(bj, bk, state, t_n, open_state):
+    """The closed contacts' normal forces summed over each pair of blocks: the pairs' keys
+    ``min(bj, bk) * n + max(bj, bk)`` (``n`` one more than the largest block index), sorted,
+    and their sums of ``|t_n|``."""
+    n = 1
+    for i in range(bj.shape[0]):
+        n = max(n, bj[i] + 1, bk[i] + 1)
+    keys = np.empty(bj.shape[0], dtype=np.int64)
+    for i in range(bj.shape[0]):
+        keys[i] = min(bj[i], bk[i]) * n + max(bj[i], bk[i])
+    order = np.argsort(keys)
+    unique = np.empty(bj.shape[0], dtype=np.int64)
+    sums = np.zeros(bj.shape[0])
+    m = -1
+    for c in order:
+        if m < 0 or unique[m] != keys[c]:
+            m += 1
+            unique[m] = keys[c]
+        if state[c] != open_state:
+            sums[m] += abs(t_n[c])
+    return unique[:m + 1], sums[:m + 1], n
+
+
+@njit(cache=True)
+def _pair_force(keys, sums, n, bj, bk):
+    """The summed normal force of the pair ``bj``, ``bk`` (0 when it has no contact)."""
+    key = min(bj, bk) * n + max(bj, bk)
+    at = np.searchsorted(keys, key)
+    if at < keys.shape[0] and keys[at] == key:
+        return sums[at]
+    return 0.0
+
+
+@njit(cache=True)
 def _earliest_crossing(v0, e0, s0, tn0, bj0, bk0, x0, c0, vel0, v1, e1, s1, tn1, bj1, bk1,
                        x1, c1, vel1, nxt, slip, open_state, normal_ratio, carry):
     """The smallest ``w0 / (w0 - w1)`` over the contacts sliding at the start and closed at
-    the end, their normal forces within ``normal_ratio`` of each other, whose slip velocity
-    changed sign; 2.0 when none did.
+    the end, the normal forces of their pair of blocks (summed over its closed contacts)
+    within ``normal_ratio`` of each other, whose slip velocity changed sign; 2.0 when none
+    did.
 
     A start's contact is matched to the first closed trial contact (in the trial's order) of
     the same vertex and edge: the trial's contacts sorted by vertex, each start's vertex
@@ -119,6 +166,8 @@ def _earliest_crossing(v0, e0, s0, tn0, bj0, bk0, x0, c0, vel0, v1, e1, s1, tn1,
     best = 2.0
     order = np.argsort(v1)
     by_vertex = v1[order]
+    keys0, sums0, n0 = _pair_normal_forces(bj0, bk0, s0, tn0, open_state)
+    keys1, sums1, n1 = _pair_normal_forces(bj1, bk1, s1, tn1, open_state)
     for i in range(v0.shape[0]):
         if s0[i] != slip:
             continue
@@ -131,7 +180,8 @@ def _earliest_crossing(v0, e0, s0, tn0, bj0, bk0, x0, c0, vel0, v1, e1, s1, tn1,
                 t = c
         if t < 0:
             continue
-        a, b = abs(tn0[i]), abs(tn1[t])
+        a = _pair_force(keys0, sums0, n0, bj0[i], bk0[i])
+        b = _pair_force(keys1, sums1, n1, bj1[t], bk1[t])
         if a > normal_ratio * b or b > normal_ratio * a:  # an impact's turn
             continue
         w0 = carry * _slip_velocity(x0, nxt, c0, vel0, v0[i], e0[i], bj0[i], bk0[i])

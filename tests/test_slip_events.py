@@ -132,7 +132,8 @@ def test_the_earliest_of_several_turns_counts_whatever_the_contacts_order():
 def test_the_matching_of_contacts_agrees_with_a_search_of_every_pair():
     """Start and trial contacts matched by vertex and edge (sorted and merged) give the
     crossing that trying every pair gives: random contact lists of the two squares, in random
-    order, some pairs only at one end, some open, some with an impact's normal force."""
+    order, some pairs only at one end, some open, and in some steps an impact's normal force
+    (the pair's summed normal force several times larger or smaller at the end)."""
     x, nxt, centroid = _two_squares()
     rng = np.random.default_rng(11)
     pairs = [(v, e) for v in range(8) for e in range(8)]
@@ -144,17 +145,20 @@ def test_the_matching_of_contacts_agrees_with_a_search_of_every_pair():
                                t_n=np.array(t_n), bj=np.ones(n, dtype=int),
                                bk=np.zeros(n, dtype=int))
 
-    def every_pair(before, after):
+    def every_pair(before, after, guard=True):
         best = None
         a, b = before.contacts, after.contacts
+        # the two squares are one pair of blocks: its normal force, summed over the closed
+        # contacts at each end
+        ratio = (np.abs(a.t_n[a.state != OPEN]).sum()
+                 / max(np.abs(b.t_n[b.state != OPEN]).sum(), 1e-300))
         for i in range(len(a.vertex)):
             if a.state[i] != SLIP:
                 continue
             for j in range(len(b.vertex)):
                 if (b.vertex[j], b.edge[j]) != (a.vertex[i], a.edge[i]) or b.state[j] == OPEN:
                     continue
-                ratio = abs(a.t_n[i]) / abs(b.t_n[j])
-                if 0.5 <= ratio <= 2.0:
+                if 0.5 <= ratio <= 2.0 or not guard:
                     w0 = slip_events._slip_velocity(x, nxt, centroid, before.velocity,
                                                     a.vertex[i], a.edge[i], 1, 0)
                     w1 = slip_events._slip_velocity(x, nxt, centroid, after.velocity,
@@ -164,8 +168,8 @@ def test_the_matching_of_contacts_agrees_with_a_search_of_every_pair():
                 break
         return best
 
-    found = 0
-    for _ in range(200):
+    found = skipped = 0
+    for _ in range(400):
         m0, m1 = rng.integers(1, 30, size=2)
         start = rng.choice(64, size=m0, replace=False)
         end = rng.permutation(np.concatenate([rng.choice(start, size=min(m0, m1)),
@@ -176,15 +180,17 @@ def test_the_matching_of_contacts_agrees_with_a_search_of_every_pair():
         after = SimpleNamespace(
             x=x, centroid=centroid, velocity=rng.normal(size=(2, 6)),
             contacts=contacts(end, rng.integers(0, 3, size=len(end)),
-                              -rng.uniform(1, 3, len(end))))
+                              -rng.uniform(1, 3, len(end)) * rng.choice([0.1, 1, 1, 1, 10])))
         expected = every_pair(before, after)
+        unguarded = every_pair(before, after, guard=False)
+        skipped += expected is None and unguarded is not None and unguarded <= 1.0
         got = slip_events.reversal_fraction(nxt, before, after)
         if expected is None or expected > 1.0:
             assert got is None
         else:
             found += 1
             assert got == pytest.approx(expected, rel=1e-14)
-    assert found >= 50
+    assert found >= 50 and skipped >= 50  # crossings found, and crossings left for an impact
 
 
 @pytest.mark.parametrize("change, why", [
@@ -199,10 +205,10 @@ def test_no_crossing_is_reported(change, why):
     assert slip_events.reversal_fraction(*_states(**args)) is None, why
 
 
-def _table(solver, locate, dt=None, amplitude_g=1.5):
+def _table(solver, locate, dt=None, amplitude_g=1.5, penalty="auto"):
     """The block on a table shaken at ``amplitude_g`` at 2 Hz (tan 36.4: 0.737 g), 1 s."""
     scene, base, block = moving_base(amplitude=amplitude_g * G)
-    scene.set_joint(JointMaterial("auto", "auto", CoulombSingle(36.4)))
+    scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(36.4)))
     sim = dda.Simulation(scene, dt=dt or DT[solver], solver=make_solver(solver),
                          locate_reversals=locate)
     return sim, sim.run(1.0, progress=False), base, block
@@ -230,6 +236,18 @@ def test_each_reversal_falls_at_the_end_of_a_step(solver):
     _, unlocated, base, block = _table(solver, False)
     assert len(unlocated.stats.reversals) == 0
     assert _turns(unlocated, base, block).max() >= 5e-3
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+@pytest.mark.parametrize("penalty, dt", [(2e8, 1.0 / 334), (2e9, 1.0 / 600), (2e10, 1.0 / 600),
+                                         (2e10, 1.0 / 334)])
+def test_stiff_springs_locate_every_reversal_too(solver, penalty, dt):
+    """On stiff springs the turning friction's moment moves the block's weight from one
+    vertex to the other within the step (749 / 113 N -> 318 / 545 N); judged contact by
+    contact that read as an impact, and one reversal in three went unlocated, its turn
+    0.27-1.0% of the peak inside a step. The pair's summed normal force barely moves."""
+    sim, result, base, block = _table(solver, True, dt=dt, penalty=penalty)
+    assert len(result.stats.reversals) >= 3
+    assert _turns(result, base, block).max() <= 2e-3  # measured at most 0.17%
 
 
 def test_by_default_only_a_small_scene_locates_reversals():
