@@ -12,8 +12,8 @@ says what it chose and why. The rule, and the measurements it comes from
 
    ``N = auto_steps_per_period + ceil(auto_steps_per_drop * drop)``,
 
-   300 for the fully implicit method and 400 + 4,100 drop for legacy DDA, whose friction is
-   explicit, first order in dt. ``drop`` is the largest share ``1 - mu_d / mu_s`` of its
+   167 + 475 drop for the fully implicit method and 400 + 4,100 drop for legacy DDA, whose
+   friction is explicit, first order in dt. ``drop`` is the largest share ``1 - mu_d / mu_s`` of its
    strength that a law of the scene loses at the onset of slip
    (:meth:`dda.contact.FrictionLaw.onset_drop`, 0 for Coulomb and Barton-Bandis). A slip
    history's error comes from the instants at which the friction force jumps, found only at
@@ -23,26 +23,30 @@ says what it chose and why. The rule, and the measurements it comes from
    that speed times the delay for the whole slip that follows; legacy DDA, whose contact
    that starts a step sticking sticks for the whole step, loses up to a step of it, so its
    error goes as ``(a + b drop) / N``. Newton's return map lets a contact slide in the very
-   step whose end finds it over its strength, and needs no more steps for a drop. The rock
+   step whose end finds it over its strength: at 300 steps a period it needed no more for a
+   drop (0.02-0.60% over the five drops below, both lengths, N within 10%). At the 167 that
+   serve it where the strength does not drop (its stiffer springs, rule 2) the drop shows:
+   0.07 / 0.49 / 0.34 / 1.18 / 1.05% at the five drops (the worst of N within 10% and both
+   lengths), so it takes 475 more per unit of drop, 300 at the rock slope's 0.28. The rock
    slope of ``examples/rock_slope.py`` (the face-onset transition law, phi_s 40.5 degrees,
    phi_d from 40.5 to 25: drops 0 / 0.052 / 0.149 / 0.280 / 0.454; the tests' 4 s, 0.5 s a
-   level, and the example's 16 s, 2 s a level; ``p = KAPPA`` x the inertia, the joints'
-   default dashpots) erred, against the rigid block until the stopper
+   level, and the example's 16 s, 2 s a level; ``p`` the solver's ``auto_kappa`` x the
+   inertia, the joints' default dashpots) erred, against the rigid block until the stopper
    (``benchmarks/auto_settings.py --scan``):
 
    =====  ============================================  =======================================
    drop   legacy: N 0.9x / rule / 1.1x; 4 s; 16 s       Newton: N 0.9x / rule / 1.1x; 4 s; 16 s
    =====  ============================================  =======================================
-   0      360 / **400** / 440: 0.22 / **0.16** / 0.13;  270 / **300** / 330: 0.05 / **0.04** /
-          0.08 / **0.05** / 0.05%                       0.03; 0.04 / **0.03** / 0.02%
-   0.052  551 / **613** / 674: 0.47 / **0.39** / 0.38;  270 / **300** / 330: 0.20 / **0.06** /
-          0.44 / **0.39** / 0.53%                       0.04; 0.14 / **0.09** / 0.07%
-   0.149  911 / **1,013** / 1,114: 0.63 / **0.45** /    270 / **300** / 330: 0.21 / **0.12** /
-          0.40; 0.70 / **0.68** / 0.63%                 0.25; 0.11 / **0.24** / 0.27%
-   0.280  1,392 / **1,547** / 1,701: 0.57 / **0.53** /  270 / **300** / 330: 0.17 / **0.22** /
-          0.51; 0.71 / **0.61** / 0.43%                 0.23; 0.31 / **0.11** / 0.24%
-   0.454  2,035 / **2,262** / 2,488: 0.41 / **0.35** /  270 / **300** / 330: 0.22 / **0.45** /
-          0.28; 0.57 / **0.57** / 0.34%                 0.38; 0.59 / **0.60** / 0.48%
+   0      360 / **400** / 440: 0.22 / **0.16** / 0.13;  150 / **167** / 183: 0.07 / **0.05** /
+          0.08 / **0.05** / 0.05%                       0.02; 0.05 / **0.06** / 0.02%
+   0.052  551 / **613** / 674: 0.47 / **0.39** / 0.38;  172 / **192** / 211: 0.27 / **0.10** /
+          0.44 / **0.39** / 0.53%                       0.05; 0.32 / **0.20** / 0.10%
+   0.149  911 / **1,013** / 1,114: 0.63 / **0.45** /    214 / **238** / 261: 0.16 / **0.32** /
+          0.40; 0.70 / **0.68** / 0.63%                 0.06; 0.52 / **0.19** / 0.20%
+   0.280  1,392 / **1,547** / 1,701: 0.57 / **0.53** /  270 / **300** / 330: 0.16 / **0.22** /
+          0.51; 0.71 / **0.61** / 0.43%                 0.23; 0.30 / **0.12** / 0.10%
+   0.454  2,035 / **2,262** / 2,488: 0.41 / **0.35** /  344 / **383** / 421: 0.26 / **0.11** /
+          0.28; 0.57 / **0.57** / 0.34%                 0.36; 0.30 / **0.30** / 0.57%
    =====  ============================================  =======================================
 
    Legacy DDA's error times ``N`` is 20-80% without a drop and 450-1,300% at the drops of
@@ -50,9 +54,10 @@ says what it chose and why. The rule, and the measurements it comes from
    0.127, where it erred about 1%.
 
    The moving base (a block on a flat table, Coulomb tan 36.4 = 0.737; 2 Hz; the rule's
-   runs: Newton / legacy DDA) errs 0.63 / 0.34% at 0.8 g (1.4 mm of slip), 0.17 / 0.25%
-   at 0.9 g, 0.086 / 0.090% at 1 g (0.086 / 0.091% at 1 Hz, 0.089 / 0.091% at 5 Hz), 0.050
-   / 0.076% at 1.3 g, 0.20 / 0.15% at 1.5 g and 0.037 / 0.072% at 1.84 g. **Slip that
+   runs: Newton / legacy DDA) errs 0.74 / 0.34% at 0.8 g (1.4 mm of slip), 0.12 / 0.25%
+   at 0.9 g, 0.16 / 0.090% at 1 g (0.16 / 0.091% at 1 Hz and at 5 Hz), 0.10 / 0.076% at
+   1.18 and 1.3 g, 0.11 / 0.39% at 1.47 g, 0.081 / 0.15% at 1.5 g and 0.042 / 0.072% at
+   1.84 g. **Slip that
    reverses without sticking**: from about 1.3 g (1.8 times the friction) the block slides
    back and forth without stopping between, and at each reversal the friction force flips by
    ``2 mu N``. Found only at the end of its step, it let the velocity err by up to ``2 mu g
@@ -64,32 +69,39 @@ says what it chose and why. The rule, and the measurements it comes from
    which the numbers here include. With reversals located, the table shaken at 0.8, 0.9, 1,
    1.18, 1.3, 1.47, 1.5 and 1.84 g, each at the base ``N`` and 5% either side, erred at
    most (the 24 runs; 0.8 g the largest but where named; ``benchmarks/auto_settings.py
-   --scan``):
+   --scan``; the penalty ``kappa`` times the inertia, rule 2):
 
-   =======  ====================================  ===================================
-   N        legacy DDA                            Newton
-   =======  ====================================  ===================================
-   150      4.07% (0.9 g 1.69, 1 g 1.13)          2.51% (1.3 g 1.76)
-   200      2.14% (0.9 g 1.21)                    1.41% (1.3 g 0.75)
-   250                                            0.91% (1.47 g 0.42)
-   300      1.15% (1.47 g 0.60)                   0.69% (1.47 g 0.37)
+   =======  ===============================  ==================  ========================
+   N        legacy DDA, kappa 3              Newton, kappa 10    Newton, kappa 3
+   =======  ===============================  ==================  ========================
+   150      4.07% (0.9 g 1.69, 1 g 1.13)     1.06%               2.51% (1.3 g 1.76)
+   167                                       0.74%               2.06% (1.3 g 1.37)
+   200      2.14% (0.9 g 1.21)               0.46%               1.41% (1.3 g 0.75)
+   300      1.15% (1.47 g 0.60)              0.25%               0.69% (1.47 g 0.37)
    400      0.64% (1.47 g 0.40)
    500      0.46%
    700      0.25%
-   =======  ====================================  ===================================
+   =======  ===============================  ==================  ========================
 
    so legacy DDA's base is 400 (700 before reversals were located, where 400 erred 3.2% at
-   1.5 g) and Newton's stays 300: the table barely above its friction, whose slip of 1.4 mm
-   is the scale, binds it (the stick springs' own give, ``mu g dt^2 / 6``, is 1% of it at
-   150 steps). Legacy's drop term grew from 3,000 to 4,100 to keep about the 1,540 steps the
-   rock slope's drop of 0.28 had (1,547 now), where 1,392 erred 0.71% over 16 s.
+   1.5 g) and Newton's 167 with springs of ten times the inertia (300 with three, 250 of
+   which erred 0.91%): the table barely above its friction, whose slip of 1.4 mm is the
+   scale, binds it through the stick springs' own give, ``mu g dt^2 / (2 kappa)``, 1% of it
+   at 150 steps with kappa 3 and 0.3% with kappa 10. Legacy DDA gains less from stiffer
+   springs (kappa 10: 1.50 / 0.62 / 0.47% at 250 / 300 / 400 steps), and on the cut slope,
+   where rule 4 sets the penalty and kappa dt, a longer dt costs its first-order friction
+   (below); it keeps kappa 3. Legacy's drop term grew from 3,000 to 4,100 to keep about the
+   1,540 steps the rock slope's drop of 0.28 had (1,547 now), where 1,392 erred 0.71% over
+   16 s.
 
    Without shaking (and as a cap with it) a
    block starting from rest may move ``TARGET_DEPTH`` (1%) of its half-width ``h = 2 area /
    perimeter`` in one step under gravity and the shaking's peak: ``dt = sqrt(2 TARGET_DEPTH
    h / (g + a_max))``.
-2. **The penalty is three times Newmark's inertia of the lightest free block**,
-   ``p_n = KAPPA 2 m / dt^2`` with ``KAPPA = 3``: stiff enough against the block's own mass
+2. **The penalty is a multiple of Newmark's inertia of the lightest free block**,
+   ``p_n = kappa 2 m / dt^2``, ``kappa`` the solver's ``auto_kappa``: 10 for the fully
+   implicit method, 3 (``KAPPA``) for legacy DDA and a solver that does not say. Stiff
+   enough against the block's own mass
    that a contact is not a soft spring the block bounces on, soft enough that OPEN-CLOSE
    settles (the step's matrix is not dominated by the springs, see
    :mod:`dda.penalty_advice`). On the block on a moving base (``benchmarks/accuracy_cost.py``'s
@@ -109,31 +121,43 @@ says what it chose and why. The rule, and the measurements it comes from
    Before slip reversals were located legacy DDA wanted the softer springs (kappa 30 erred
    15.4 / 13.1 / 3.3 / 0.81% at 75 / 100 / 200 / 300 steps: its stick is explicit, and a
    stiff one rang); with them located the three are within 0.3% of each other from 150
-   steps on. ``KAPPA`` 3 serves both at the rule's 300 / 400 steps (legacy DDA at 400:
-   0.090%).
+   steps on. Newton gains most from stiffer springs where the steps are few (kappa 10
+   against 3: 0.18 / 0.40% at 150 steps, 0.27 / 0.95% at 100), and takes 10 with its 167
+   steps a period (rule 1: 0.16% at 1 g, 0.74% at most over the table's amplitudes);
+   legacy DDA's 3 serves it at 400 (0.090%).
 3. **No contact sinks deeper than 1% of its half-width under its load**: the penalty is raised
    to ``F / (TARGET_DEPTH h)`` where a block's load ``F`` (per vertex contact, two sharing a
    face) is its weight, the weight of the free blocks above it (each by the share of its
    width that lies over the block) and its point loads, times ``1 + a_max / g`` under
-   shaking. When that is more than ``KAPPA`` times the inertia and dt is "auto" too, dt is
+   shaking. When that is more than ``kappa`` times the inertia and dt is "auto" too, dt is
    shortened until it is not.
 4. **A jointed mass is not softer than its rock**: where free blocks rest on free blocks,
    the penalty is at least ``MASS_STIFFNESS`` (2) times the smallest Young's modulus of the
-   blocks that carry others, and an "auto" dt is shortened to keep it at ``KAPPA`` times the
+   blocks that carry others, and an "auto" dt is shortened to keep it at ``kappa`` times the
    inertia. Joints softer than the rock make the whole mass softer and change its answer: on
    the cut slope of ``examples/jointed_slope.py`` (E 1e10 Pa) the face blocks' median motion
    after 0.3 s was 55 mm at 0.22 E (the first three rules' 2.2e9 N/m; 57 and 61 mm at dt
    3.6e-4 and 1.8e-4: not the step), 38 mm at 0.5 E, 31 mm at E, 29 mm at 2 E and 27 mm at
    5 E. A single block on its base does not depend on it (the moving base and the rock slope,
-   the rule's validation, get no floor).
+   the rule's validation, get no floor). Newton's kappa of 10 gives it a step ``sqrt(10 /
+   3)`` times legacy DDA's (4.3e-4 s against 2.4e-4 at 2e10 N/m): over 3 s of shaking on
+   five cuts of the rock mass (``benchmarks/cut_rate.py --auto --seconds 3``) 2 of 34,242
+   steps were cut, against none of 62,503 at kappa 3, in 914 s of CPU against 1,155, and the
+   face blocks moved 135 / 150 / 143 / 167 / 134 mm (median), against 136 / 157 / 123 / 131 /
+   147 mm at kappa 3 and, at 2e10 N/m and dt 1.2e-4 s, 206 and 174 mm (cuts 2 and 3) and 136
+   (cut 4): these wedges are near their limit, and neither step is the nearer throughout.
 5. The shear penalty equals the normal one.
 
 A joint with a number keeps it; only "auto" values are chosen, all with the same rule (the
 lightest free block and the most loaded contact of the scene).
 
-The rule's own runs (``benchmarks/results/auto_settings.md``) err 0.086% / 0.22% / 0.11%
-(Newton: moving base / rock slope 4 s / 16 s; 300 steps a period) and 0.090% / 0.53% / 0.61%
-(legacy DDA: 400 / 1,547 / 1,547).
+The rule's own runs (``benchmarks/results/auto_settings.md``) err 0.16% / 0.22% / 0.12%
+(Newton: moving base / rock slope 4 s / 16 s; 167 / 300 / 300 steps a period) and 0.090% /
+0.53% / 0.61% (legacy DDA: 400 / 1,547 / 1,547). On the moving base Newton takes the
+steps of the cheapest hand-picked cell within 1% of ``benchmarks/accuracy_cost.py``'s grid
+(dt 3e-3 s, 2e7 N/m: 337 steps, 0.89%) and its CPU time (0.077 s against 0.076 s, the median
+of seven runs each), for a sixth of the error (it took 300 steps a period with kappa 3:
+1.8 times the CPU).
 
 """
 
@@ -150,7 +174,8 @@ from dda.penalty_advice import TARGET_DEPTH
 __all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose",
            "largest_onset_drop", "shaking_frequency", "steps_for_drop"]
 
-#: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block
+#: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block, for
+#: a solver without its own ``auto_kappa`` (legacy DDA's; the fully implicit method takes 10)
 KAPPA = 3.0
 #: where blocks carry blocks, the penalty at least this multiple of their rock's Young's modulus
 MASS_STIFFNESS = 2.0
@@ -332,7 +357,8 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     Parameters
     ----------
     model : dda.model.Model
-    solver : the solver (its ``auto_steps_per_period`` and ``auto_steps_per_drop``)
+    solver : the solver (its ``auto_steps_per_period``, ``auto_steps_per_drop`` and
+        ``auto_kappa``)
     dt : the step asked for, or None to choose it
     shakes : the scene's shaking histories (:class:`dda.effects.AccelerationHistory`)
     duration : the run's length when known (the shaking is measured over it)
@@ -351,6 +377,7 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     a_max = max((float(np.hypot(a[:, 0], a[:, 1]).max()) for _, a in samples), default=0.0)
     name = model.block_label(light)
     steps = int(getattr(solver, "auto_steps_per_period", 300))
+    kappa = float(getattr(solver, "auto_kappa", KAPPA))
     if dt is None:
         f = _frequency(samples)
         h_min = float(np.min(h[free]))
@@ -379,8 +406,8 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     if not auto_penalty:
         return AutoChoice(dt, np.nan, np.nan, "\n".join(lines))
     inertia = 2.0 * m / dt**2
-    pn = KAPPA * inertia
-    reason = (f"normal penalty: {KAPPA:g} x Newmark's inertia 2 m / dt^2 = {inertia:.3g} N/m "
+    pn = kappa * inertia
+    reason = (f"normal penalty: {kappa:g} x Newmark's inertia 2 m / dt^2 = {inertia:.3g} N/m "
               f"of the lightest free block ({name}, {m:.3g} kg/m): {pn:.3g} N/m")
     loads, carries = _block_loads(model, a_max)
     need = np.where(free, loads / (TARGET_DEPTH * h), 0.0)
@@ -391,8 +418,8 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
         reason = (f"normal penalty: {pn:.3g} N/m keeps the load under {who} ({loads[worst]:.3g} "
                   f"N/m per contact{', with the shaking' if a_max else ''}) within "
                   f"{100 * TARGET_DEPTH:g}% of its half-width ({h[worst]:.3g} m); "
-                  f"{KAPPA:g} x the inertia 2 m / dt^2 of the lightest block would be "
-                  f"{KAPPA * inertia:.3g} N/m")
+                  f"{kappa:g} x the inertia 2 m / dt^2 of the lightest block would be "
+                  f"{kappa * inertia:.3g} N/m")
     if carries.any():
         young = np.where(carries, model.young, np.inf)
         soft = int(np.argmin(young))
@@ -402,11 +429,11 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
             reason = (f"normal penalty: {MASS_STIFFNESS:g} x the Young's modulus "
                       f"{young[soft]:.3g} Pa of {model.block_label(soft)}, which carries "
                       f"blocks: {pn:.3g} N/m (joints softer than the rock soften the whole "
-                      f"mass; {KAPPA:g} x the inertia 2 m / dt^2 of the lightest block would "
-                      f"be {KAPPA * inertia:.3g} N/m)")
-    if auto_dt and pn > KAPPA * inertia:
-        dt = float(np.sqrt(KAPPA * 2.0 * m / pn))
-        reason += f"; dt shortened to {dt:.3g} s to keep it at {KAPPA:g} x the inertia"
+                      f"mass; {kappa:g} x the inertia 2 m / dt^2 of the lightest block would "
+                      f"be {kappa * inertia:.3g} N/m)")
+    if auto_dt and pn > kappa * inertia:
+        dt = float(np.sqrt(kappa * 2.0 * m / pn))
+        reason += f"; dt shortened to {dt:.3g} s to keep it at {kappa:g} x the inertia"
     lines.append(reason)
     lines.append("shear penalty: the normal penalty")
     return AutoChoice(dt, pn, pn, "\n".join(lines))

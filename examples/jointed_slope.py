@@ -18,14 +18,15 @@ in an earlier version of the run), the rest steps whose OPEN-CLOSE ends in a cyc
 contacts' states and lagged normal forces.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``; ``sim.choices``
-is printed): blocks carry blocks here, so the penalty is twice the rock's Young's modulus,
-2e10 N/m, at dt 2.4e-4 s (3 times the lightest block's inertia), for both solvers. It runs the
-0.3 s in about 27 s (legacy: 1,274 steps, none cut) and 43 s (Newton: 1,274 steps, none
-cut), and the face blocks move 23.4 / 29.4 mm and 23.7 / 28.5 mm. Joints softer than the rock
-make the whole mass softer and its face moves further (legacy, 0.3 s, median / most): 55 / 85 mm at
-2.2e9 N/m (57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: it is the penalty, not dt),
-38 / 65 mm at 5e9, 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10 (measured before
-the joints' impact dashpot).
+is printed): blocks carry blocks here, so the penalty is twice the rock's Young's modulus, 2e10
+N/m, at dt 2.4e-4 s under legacy DDA (3 times the lightest block's inertia) and 4.3e-4 s under
+Newton (10 times). It runs the 0.3 s in about 22 s (legacy: 1,274 steps, none cut) and 23 s
+(Newton: 698 steps, none cut; 43 s and 1,274 steps with 3 times the inertia), and the face
+blocks move 23.4 / 29.4 mm and 22.9 / 27.9 mm (23.7 / 28.5 mm at 2.4e-4 s). Joints softer than
+the rock make the whole mass softer and its face moves further (legacy, 0.3 s, median / most):
+55 / 85 mm at 2.2e9 N/m (57 / 89 and 61 / 107 mm at dt 3.6e-4 and 1.8e-4: it is the penalty,
+not dt), 38 / 65 mm at 5e9, 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm at 5e10
+(measured before the joints' impact dashpot).
 
 Through 10 s of shaking (``--duration 10``) the face slides out along a bedding plane: legacy
 DDA took 145 s of wall time (6,289 steps, 110 cut) and its face blocks ended 400 mm (median)
@@ -52,11 +53,15 @@ same joint sets. Cuts differ: over 10 s at these settings the share of steps cut
 (``benchmarks/cut_rate.py``). Where a larger wedge slides, legacy DDA's explicit friction shows
 its first-order error in dt: on seed 4 the face moved 249 mm (median) in 3 s under legacy DDA
 and 127 mm under Newton at these settings, 216 / 147 mm under ``--auto`` (dt 2.4e-4 s), and 164
-/ 136 mm at 2e10 N/m and dt 1.2e-4 s; on seed 0 the two agree within 1% after 10 s. Under
-``--auto`` through 10 s the five cuts had 11 of 208,419 steps cut (legacy) and none of 208,337
-(Newton), in 7.4-9.4 and 10.8-14.0 minutes of CPU a run (``results/cut_rate_auto_10s.md``); the
-face moved 402-716 mm (median), and the two methods parted on seeds 1 and 4, once each way:
-which wedge slides out over 10 s is chaotic at that scale.
+/ 136 mm at 2e10 N/m and dt 1.2e-4 s; on seed 0 the two agree within 1% after 10 s. Newton's
+``--auto`` at 4.3e-4 s moved the five cuts' faces 135 / 150 / 143 / 167 / 134 mm in 3 s, at
+2.4e-4 s (3 times the inertia) 136 / 157 / 123 / 131 / 147 and at 1.2e-4 s 206 / 174 / 136 mm
+on seeds 2 / 3 / 4: near their limit these wedges move by tens of percent with the step either
+way. Under ``--auto`` through 10 s (Newton still at 2.4e-4 s) the five cuts had 11 of 208,419
+steps cut (legacy) and none of 208,337 (Newton), in 7.4-9.4 and 10.8-14.0 minutes of CPU a run
+(``results/cut_rate_auto_10s.md``); the face moved 402-716 mm (median), and the two methods
+parted on seeds 1 and 4, once each way: which wedge slides out over 10 s is chaotic at that
+scale.
 
 Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` (a frame every 0.05 s of simulated time, and
 the run's end) and prints the blocks, how far the blocks of the face moved, and the cost

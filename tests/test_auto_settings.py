@@ -41,14 +41,26 @@ def test_a_joint_takes_auto_and_names_other_strings():
         dda.Simulation(column(1), dt="fast")
 
 
-def test_a_given_dt_gets_three_times_the_inertia_of_the_lightest_block():
-    sim = dda.Simulation(column(1), dt=1e-3)
+@pytest.mark.parametrize("solver, kappa", [(LegacyPullBack(), 3.0), (NewtonRaphson(), 10.0)])
+def test_a_given_dt_gets_the_solvers_multiple_of_the_inertia_of_the_lightest_block(solver,
+                                                                                  kappa):
+    sim = dda.Simulation(column(1), dt=1e-3, solver=solver)
     inertia = 2 * MASS / 1e-6
-    assert sim.dt == 1e-3
-    np.testing.assert_allclose(sim.model.joints.normal_penalty, KAPPA * inertia, rtol=1e-12)
-    np.testing.assert_allclose(sim.model.joints.shear_penalty, KAPPA * inertia, rtol=1e-12)
-    assert "3 x Newmark's inertia" in sim.choices and "block 'b0'" in sim.choices
+    assert sim.dt == 1e-3 and solver.auto_kappa == kappa
+    np.testing.assert_allclose(sim.model.joints.normal_penalty, kappa * inertia, rtol=1e-12)
+    np.testing.assert_allclose(sim.model.joints.shear_penalty, kappa * inertia, rtol=1e-12)
+    assert f"{kappa:g} x Newmark's inertia" in sim.choices and "block 'b0'" in sim.choices
     assert "dt:" not in sim.choices  # dt was given
+    assert KAPPA == 3.0  # a solver that does not say takes the module's
+
+
+def test_a_solver_of_ones_own_says_how_stiff_its_springs():
+    class Stiff(LegacyPullBack):
+        auto_kappa = 30.0
+
+    sim = dda.Simulation(column(1), dt=1e-3, solver=Stiff())
+    np.testing.assert_allclose(sim.model.joints.normal_penalty, 30 * 2 * MASS / 1e-6,
+                               rtol=1e-12)
 
 
 def test_without_shaking_dt_lets_a_block_fall_one_percent_of_its_half_width():
@@ -56,11 +68,16 @@ def test_without_shaking_dt_lets_a_block_fall_one_percent_of_its_half_width():
     dt = np.sqrt(2 * TARGET_DEPTH * HALF_WIDTH / G)
     assert sim.dt == pytest.approx(dt, rel=1e-12)
     # the block comes to rest on its two springs, each sunk by half its weight over the
-    # penalty: h / 600 (3 x 2 m / dt^2 with dt^2 = 0.02 h / g), 0.17% of its half-width
+    # penalty: h / 2,000 (10 x 2 m / dt^2 with dt^2 = 0.02 h / g, Newton's), 0.05% of its
+    # half-width (legacy DDA's 3 x: h / 600)
     p = sim.model.joints.normal_penalty[0]
     result = sim.run(40 * sim.dt, progress=False)
     sunk = result.stats["spring_penetration"]
     assert sunk[-1] == pytest.approx(0.5 * MASS * G / p, rel=1e-3)
+    assert sunk[-1] == pytest.approx(HALF_WIDTH / 2000.0, rel=1e-3)
+    legacy = dda.Simulation(column(1), dt="auto", solver=LegacyPullBack())
+    assert legacy.dt == sim.dt
+    sunk = legacy.run(40 * sim.dt, progress=False).stats["spring_penetration"]
     assert sunk[-1] == pytest.approx(HALF_WIDTH / 600.0, rel=1e-3)
 
 
@@ -71,11 +88,12 @@ def test_a_heavy_load_raises_the_penalty_to_hold_it():
     scene.add_point_load(1, (0.5, 1.0), (0.0, -20 * weight))
     need = 0.5 * 21 * weight / (TARGET_DEPTH * HALF_WIDTH)
     sim = dda.Simulation(scene, dt=0.05)  # a long step: a soft penalty by the inertia
-    assert KAPPA * 2 * MASS / 0.05**2 < need
+    kappa = NewtonRaphson.auto_kappa  # the default solver's
+    assert kappa * 2 * MASS / 0.05**2 < need
     np.testing.assert_allclose(sim.model.joints.normal_penalty, need, rtol=1e-9)
     assert "keeps the load under block 'b0'" in sim.choices
-    auto = dda.Simulation(scene, dt="auto")  # dt shortened to keep the penalty at 3 x
-    assert auto.dt == pytest.approx(np.sqrt(KAPPA * 2 * MASS / need), rel=1e-9)
+    auto = dda.Simulation(scene, dt="auto")  # dt shortened to keep the penalty at kappa x
+    assert auto.dt == pytest.approx(np.sqrt(kappa * 2 * MASS / need), rel=1e-9)
     assert "dt shortened" in auto.choices
     # the block settles with its contacts at 1% of its half-width (5 mm); the swing of the
     # settling stays below the 5% at which the penalty advice warns
@@ -98,7 +116,10 @@ def test_blocks_that_carry_blocks_get_joints_twice_as_stiff_as_their_rock():
     np.testing.assert_allclose(sim.model.joints.normal_penalty, floor, rtol=1e-12)
     assert "2 x the Young's modulus 1e+10 Pa of block 'b0', which carries blocks" in sim.choices
     auto = dda.Simulation(column(n), dt="auto")
-    assert auto.dt == pytest.approx(np.sqrt(KAPPA * 2 * MASS / floor), rel=1e-9)
+    kappa = NewtonRaphson.auto_kappa  # the default solver's
+    assert auto.dt == pytest.approx(np.sqrt(kappa * 2 * MASS / floor), rel=1e-9)
+    legacy = dda.Simulation(column(n), dt="auto", solver=LegacyPullBack())
+    assert legacy.dt == pytest.approx(np.sqrt(KAPPA * 2 * MASS / floor), rel=1e-9)
     assert "dt shortened" in auto.choices
     result = auto.run(300 * auto.dt, progress=False)
     weight = MASS * G
@@ -106,10 +127,11 @@ def test_blocks_that_carry_blocks_get_joints_twice_as_stiff_as_their_rock():
     joints = 55 * 0.5 * weight / floor
     assert result.displacement(n)[-1, 1] == pytest.approx(-joints - strain, rel=0.02)
     # a single block on its base gets no floor
-    assert dda.Simulation(column(1), dt=1e-3).model.joints.normal_penalty[0] < floor
+    single = dda.Simulation(column(1), dt=1e-2).model.joints.normal_penalty[0]
+    assert single == pytest.approx(kappa * 2 * MASS / 1e-4, rel=1e-12) and single < floor
 
 
-@pytest.mark.parametrize("solver, steps", [(NewtonRaphson(), 300), (LegacyPullBack(), 400)])
+@pytest.mark.parametrize("solver, steps", [(NewtonRaphson(), 167), (LegacyPullBack(), 400)])
 def test_dt_resolves_the_shaking_by_the_solver(solver, steps):
     shake = lambda t: (0.3 * G * np.sin(2 * np.pi * 5.0 * t), 0.0)  # noqa: E731
     sim = dda.Simulation(column(1, shake=shake), dt="auto", solver=solver)
@@ -139,8 +161,8 @@ def _drop(phi_static, phi_dynamic):
     # a drop of 3.7%: 151 more
     (LegacyPullBack(), 34.0, 400 + int(np.ceil(4100.0 * _drop(35.0, 34.0)))),
     (LegacyPullBack(), 35.0, 400),  # no drop
-    (NewtonRaphson(), 20.0, 300),  # Newton adds none
-    (NewtonRaphson(), 35.0, 300)])
+    (NewtonRaphson(), 20.0, 167 + int(np.ceil(475.0 * _drop(35.0, 20.0)))),  # 372
+    (NewtonRaphson(), 35.0, 167)])
 def test_the_steps_a_period_grow_with_the_strength_lost_at_onset(solver, phi_dynamic, steps):
     from dda.contact import StaticDynamicTransition
 
@@ -151,7 +173,7 @@ def test_the_steps_a_period_grow_with_the_strength_lost_at_onset(solver, phi_dyn
     assert sim.dt == pytest.approx(1.0 / (steps * 5.0), rel=1e-9)
     assert f"{steps} steps" in sim.choices
     # the reason is shown where it applies
-    assert ("loses" in sim.choices) == (phi_dynamic < 35.0 and solver.name == "legacy")
+    assert ("loses" in sim.choices) == (phi_dynamic < 35.0)
 
 
 def test_the_largest_drop_of_the_scene_s_laws_sets_legacy_s_steps():
@@ -275,7 +297,7 @@ def test_scene_files_take_auto_and_dda_info_says_what_it_chose(tmp_path, capsys)
     assert sim.dt == pytest.approx(np.sqrt(2 * TARGET_DEPTH * HALF_WIDTH / G), rel=1e-12)
     info = describe(loaded)
     assert "auto       dt: a block starting from rest moves at most 1%" in info
-    assert "normal penalty: 3 x Newmark's inertia" in info
+    assert "normal penalty: 10 x Newmark's inertia" in info  # the default solver's
     assert main(["run", str(path), "--out", str(tmp_path / "out")]) == 0
     assert "  auto: shear penalty: the normal penalty" in capsys.readouterr().out
     path.write_text(SCENE.replace('normal_penalty = "auto"', 'normal_penalty = "stiff"'))

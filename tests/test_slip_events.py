@@ -20,8 +20,9 @@ from tests.checkpoint_scene import InterruptOnce
 from tests.test_checkpoint_safety import _edit
 
 G = 9.81
-# 300 steps a period at 2 Hz (Newton's in the rule of dda.auto_settings) and 700 (legacy DDA's
-# before reversals were located; 400 since)
+# 300 steps a period at 2 Hz (Newton's in the rule of dda.auto_settings before its springs were
+# stiffened to 10 times the inertia; 167 since) and 700 (legacy DDA's before reversals were
+# located; 400 since)
 DT = {"newton": 1.0 / 600.0, "legacy": 1.0 / 1400.0}
 
 

@@ -131,6 +131,9 @@ class NonlinearSolver(ABC):
     #: the steps added per unit of the largest strength drop at the onset of slip of the
     #: scene's friction laws (:meth:`dda.contact.FrictionLaw.onset_drop`; 0: none added)
     auto_steps_per_drop = 0.0
+    #: the "auto" penalty as a multiple of Newmark's inertia ``2 m / dt^2`` of the lightest free
+    #: block (:mod:`dda.auto_settings`, rule 2)
+    auto_kappa = 3.0
 
     def factors(self) -> FactorSet:
         """The sparse factorizations this solver keeps from step to step (their symbolic

@@ -52,6 +52,8 @@ class LegacyPullBack(NonlinearSolver):
     # its onset of slip lags by up to a step: where the strength drops at onset, the slide
     # lost grows with the drop (dda.auto_settings, rule 1)
     auto_steps_per_drop = 4100.0
+    # stiffer stick springs gain it nothing: its explicit friction's error stays (rule 2)
+    auto_kappa = 3.0
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element

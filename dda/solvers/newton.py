@@ -167,6 +167,12 @@ class NewtonRaphson(NonlinearSolver):
     """
 
     name = "newton"
+    # stiff stick springs give little (the give mu g dt^2 / (2 kappa) would be 1% of the
+    # smallest slip the rule serves at 150 steps with kappa 3), so fewer steps a period serve;
+    # a strength drop at onset still asks for more (dda.auto_settings, rules 1 and 2)
+    auto_steps_per_period = 167
+    auto_steps_per_drop = 475.0
+    auto_kappa = 10.0
     # the default also for a solver pickled before the setting existed (a checkpoint)
     unsettled_predictor = False
 

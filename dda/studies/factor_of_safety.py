@@ -273,8 +273,8 @@ def _step_cap(model, dt: float) -> float:
     the lightest free block on the stiffest joint (:func:`dda.plausibility.check_time_step`
     warns at ``DT_PERIODS`` in a dynamic analysis). An "auto" penalty is the one the
     simulation would choose at ``dt`` (:func:`dda.auto_settings.choose`; at the capped step
-    its inertia rule, ``6 m / dt^2``, comes to ``6 / (100 pi)^2`` of that penalty, so the
-    choice stands)."""
+    its inertia rule, ``2 kappa m / dt^2`` with kappa 3 to 10, comes to at most ``20 / (100
+    pi)^2`` of that penalty, so the choice stands)."""
     penalties = np.asarray(model.joints.normal_penalty, dtype=float)
     if np.isnan(penalties).any():
         from dda.auto_settings import choose
