@@ -18,8 +18,8 @@ Runs, for both solvers, with the rule of :mod:`dda.auto_settings`:
 the transition law (phi_d 40.5 to 25 degrees) at the rule's steps a period and 10% either side,
 both lengths, the moving base's against N and the penalty's multiple of the inertia, and
 the table at eight amplitudes (``SCAN_AMPLITUDES``, 0.8-1.84 g) against the steps a period,
-each 5% either side, with the worst error of each N printed last (about 3 minutes more on
-two cores).
+each 5% either side (Newton also with legacy DDA's springs, 3 times the inertia, its rule
+before), with the worst error of each N printed last (about 4 minutes more on two cores).
 
 The runs go two at a time, in two worker processes that first run the moving base and the 4 s
 rock slope with each solver, untimed (about 3 s): a process's first run of a solver also loads
@@ -57,9 +57,10 @@ SCAN_AMPLITUDES = (0.8, 0.9, 1.0, 1.18, 1.3, 1.47, 1.5, 1.84)
 
 
 def moving_base_error(solver: str, dt="auto", penalty="auto", amplitude=G,
-                      freq=2.0, steps=None, repeat=1) -> dict:
+                      freq=2.0, steps=None, repeat=1, kappa=None) -> dict:
     """The moving base's error against the analytical slip (1 s, or two periods where that
-    is longer); ``steps``, when given, is the steps a period "auto" takes; CPU the median of
+    is longer); ``steps``, when given, is the steps a period "auto" takes, and ``kappa`` its
+    penalty's multiple of the inertia (the solver's ``auto_kappa``); CPU the median of
     ``repeat`` runs (a run takes 0.05-0.2 s, which one run times to some 20%)."""
     import dda
     from dda.contact import CoulombSingle, JointMaterial
@@ -72,6 +73,8 @@ def moving_base_error(solver: str, dt="auto", penalty="auto", amplitude=G,
     chosen = make_solver(solver)
     if steps is not None:
         chosen.auto_steps_per_period, chosen.auto_steps_per_drop = steps, 0.0
+    if kappa is not None:
+        chosen.auto_kappa = kappa
     duration = max(1.0, 2.0 / freq)
     cpus = []
     for _ in range(repeat):
@@ -85,7 +88,8 @@ def moving_base_error(solver: str, dt="auto", penalty="auto", amplitude=G,
     error = np.abs(slip - np.interp(result.time, times, ref)).max() / np.abs(ref).max()
     case = "moving base" + ("" if (amplitude, freq) == (G, 2.0) else
                             f", {amplitude / G:.3g} g at {freq:g} Hz")
-    return {"case": case, "solver": solver, "dt": sim.dt,
+    name = solver if kappa is None else f"{solver} (kappa {kappa:g})"
+    return {"case": case, "solver": name, "dt": sim.dt,
             "penalty": float(sim.model.joints.normal_penalty[0]), "error": float(error),
             "cpu": cpu, "cuts": len(result.stats.cuts), "steps": len(result.time) - 1}
 
@@ -200,12 +204,14 @@ def jobs(scan: bool):
                          f"scan: N {n}, kappa {kappa:g}"))
         # the table at every amplitude against the steps a period, each 5% either side
         # (rule 1's base: the worst of a row is what the base must keep within 1%)
-        for solver, bases in (("newton", (150, 167, 200, 300)),
-                              ("legacy", (150, 200, 300, 400, 500, 700))):
+        # (and Newton with legacy DDA's springs, 3 times the inertia: the rule before)
+        for solver, bases, kappa in (("newton", (150, 167, 200, 300), None),
+                                     ("newton", (150, 167, 200, 300), 3.0),
+                                     ("legacy", (150, 200, 300, 400, 500, 700), None)):
             for n, scale, amplitude in itertools.product(bases, (0.95, 1.0, 1.05),
                                                          SCAN_AMPLITUDES):
                 todo.append(("mb", (solver, "auto", "auto", amplitude * G, 2.0,
-                                    int(round(scale * n))),
+                                    int(round(scale * n)), 1, kappa),
                              f"scan: N {n} x {scale:g}"))
         # the rock slope against the steps a period and the law's drop (rule 1's table):
         # each drop at the rule's N and around it

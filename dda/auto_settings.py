@@ -344,10 +344,10 @@ def _steps_per_period(model, solver, steps: int) -> tuple[int, str]:
     if need == steps:
         return steps, "the solver's auto_steps_per_period"
     return need, (
-        f"the solver's auto_steps_per_period {steps}, and as {solver.name} finds the onset of "
-        f"slip only at the end of a step and {law!r} loses {100 * drop:.3g}% of its strength "
-        f"there, its auto_steps_per_drop {per_drop:g} x {drop:.4g} = {per_drop * drop:.1f} "
-        "more, rounded up")
+        f"the solver's auto_steps_per_period {steps}, and as {solver.name} resolves the onset "
+        f"of slip only to a step and {law!r} loses {100 * drop:.3g}% of its strength there, "
+        f"its auto_steps_per_drop {per_drop:g} x {drop:.4g} = {per_drop * drop:.1f} more, "
+        "rounded up")
 
 
 def choose(model, solver, dt: float | None, shakes=(), duration: float | None = None,

@@ -125,7 +125,9 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
         return None
     inertia = 2.0 * mass / dt**2
     ratio = penalty / inertia
-    if ratio <= STIFF_RATIO:
+    # (with round-off to spare: the fully implicit method's "auto" penalty is STIFF_RATIO
+    # times the inertia, dda.auto_settings, and is not to be called too stiff)
+    if ratio <= STIFF_RATIO * (1.0 + 1e-9):
         return None
     dt_ok = math.sqrt(2.0 * STIFF_RATIO * mass / penalty)
     mean = f" (they average dt = {mean_dt:.3g} s)" if held else ""

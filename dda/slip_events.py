@@ -70,26 +70,26 @@ MIN_FRACTION = 0.02
 #: legacy DDA: 658 in 1,139 steps, against 690 steps when none is located); with it 150 and
 #: 19,992
 WAIT = 8
-#: a contact whose pair of blocks carries, summed over the pair's closed contacts, a normal
-#: force at one end of the step more than this many times the one at the other is left where
-#: the step put it: its slip turned in an impact, where the normal force, not the friction,
-#: decides the motion. Over the 84 impacts of ``tests/stability`` at dt 1e-3 (both solvers,
-#: E/1e4 to 1,000 E) locating every reversal took the steps from 21,172 to 20,719 and the cut
-#: ones from 267 to 328, a block striking a stopper at 1,000 E under Newton-Raphson from 309
-#: steps to 599, and 1,115 for a block on a lip (339); with this guard on each contact's own
-#: force 19,992 and 283 in all, 309 and 340 for those two. The pair's sum, not each
-#: contact's force: when the friction under a block turns, its moment moves the weight from
-#: one vertex to the other, by some 30% at a soft penalty but by up to the rigid block's
-#: whole swap (749 / 113 N to 318 / 545 N a step on the table at 1.5 g with ten times the
-#: inertia as penalty) where the springs are stiff, and a guard on each contact missed one
-#: reversal in three there (at 2e8 N/m and dt 3e-3 s, 2e9 and 2e10 at dt 1/600 s; its turn
-#: then fell 0.27-1.0% of the peak slip velocity inside a step; now all, within 0.17%).
-#: The pair's sum barely moves when the friction turns. Over the 56 impact runs of
-#: ``tests/stability`` at dt 1e-3 (7 scenes, E/1e4 to 1,000 E, both solvers) it took 21,207
-#: steps, 266 cut and 141 reversals located, against 19,936, 283 and 150 with the guard on
-#: each contact: 1,262 of the 1,271 steps more are the lip at 1,000 E under legacy DDA,
-#: whose path takes 631-2,863 steps with dt within 3% and no reversal located (2,863 at
-#: 1e-3 s, as with the pair's sum; 1,601 with the guard on each contact)
+#: a contact whose pair of blocks carries, summed over the pair's closed contacts, a normal force at
+#: one end of the step more than this many times the one at the other is left where the step put it:
+#: its slip turned in an impact, where the normal force, not the friction, decides the motion. When
+#: the guard came (judging each contact's own force), over 84 impact runs of ``tests/stability`` at
+#: dt 1e-3 (both solvers, E/1e4 to 1,000 E) locating every reversal took the steps from 21,172 to
+#: 20,719 and the cut ones from 267 to 328, a block striking a stopper at 1,000 E under
+#: Newton-Raphson from 309 steps to 599, and 1,115 for a block on a lip (339); with the guard 19,992
+#: and 283 in all, 309 and 340 for those two. The pair's sum, not each contact's force: when the
+#: friction under a block turns, its moment moves the weight from one vertex to the other, by some
+#: 30% at a soft penalty but by up to the rigid block's whole swap (749 / 113 N to 318 / 545 N a
+#: step on the table at 1.5 g with ten times the inertia as penalty) where the springs are stiff,
+#: and a guard on each contact missed one reversal in three there (at 2e8 N/m and dt 3e-3 s, 2e9 and
+#: 2e10 at dt 1/600 s; its turn then fell 0.27-1.0% of the peak slip velocity inside a step; now
+#: all, within 0.17%). The pair's sum barely moves when the friction turns. Over 56 impact runs (the
+#: 7 scenes of ``tests/stability.scenes.IMPACTS`` at E/1e4, E/100, E and 1,000 E, both solvers, dt
+#: 1e-3; the code of the time, which moved the counts above a little) it took 21,207 steps, 266 cut
+#: and 141 reversals located, against 19,936, 283 and 150 with the guard on each contact: 1,262 of
+#: the 1,271 steps more are the lip at 1,000 E under legacy DDA, whose path takes 631-2,863 steps
+#: with dt within 3% and no reversal located (2,863 at 1e-3 s, as with the pair's sum; 1,601 with
+#: the guard on each contact)
 NORMAL_RATIO = 2.0
 
 

@@ -304,3 +304,14 @@ def test_scene_files_take_auto_and_dda_info_says_what_it_chose(tmp_path, capsys)
     with pytest.raises(SceneFileError, match='normal_penalty: must be a positive number or '
                                              '"auto", got \'stiff\''):
         load_scene(path)
+
+
+def test_a_choice_without_a_solver_takes_the_default_multiple():
+    """dda.studies.factor_of_safety asks ``choose`` for the penalty with no solver: the
+    module's ``KAPPA`` (3) times the inertia, and 300 steps a period."""
+    from dda.auto_settings import choose
+
+    sim = dda.Simulation(column(1), dt=1e-3)
+    auto = choose(sim.model, None, 1e-3)
+    assert auto.normal_penalty == pytest.approx(KAPPA * 2 * MASS / 1e-6, rel=1e-12)
+    assert "3 x Newmark's inertia" in auto.text

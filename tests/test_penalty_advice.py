@@ -79,3 +79,26 @@ def test_a_good_penalty_is_not_warned_about(penalty):
 def test_penalty_warning_is_exported():
     assert dda.PenaltyWarning is PenaltyWarning
     assert issubclass(PenaltyWarning, UserWarning)
+
+
+def test_the_fully_implicit_methods_own_auto_penalty_is_not_called_too_stiff():
+    """Newton's "auto" penalty is ``STIFF_RATIO`` (10) times the inertia, and where rule 3 or
+    4 shortens dt, ``sqrt(10 2 m / p)`` comes back through round-off to a ratio a unit in the
+    last place above 10 (in about a quarter of penalties): the advice must not call the
+    simulation's own choice too stiff."""
+    import numpy as np
+
+    from dda.penalty_advice import STIFF_RATIO, stiff_penalty_advice
+    from dda.solvers import NewtonRaphson
+
+    assert NewtonRaphson.auto_kappa == STIFF_RATIO
+    rng = np.random.default_rng(3)
+    above = 0
+    for p in 10.0 ** rng.uniform(7, 12, 400):
+        mass = float(rng.uniform(10.0, 1e4))
+        dt = float(np.sqrt(NewtonRaphson.auto_kappa * 2.0 * mass / p))  # as dda.auto_settings
+        above += p / (2.0 * mass / dt**2) > STIFF_RATIO
+        assert stiff_penalty_advice(40, 100, p, mass, dt, "block 'b'") is None
+    assert above > 0  # round-off put some above the ratio
+    # a penalty truly above it is still told
+    assert stiff_penalty_advice(40, 100, 1.01 * p, mass, dt, "block 'b'") is not None
