@@ -79,3 +79,53 @@ def test_the_progress_bar_shows_its_note_until_the_first_step():
     bar.close()
     assert "compiling" not in out.getvalue().rsplit("\r", 1)[-1]
     assert "0.5000/1.0000" in out.getvalue()
+
+
+_ONE_SIGNATURE = """
+import sys
+from numba.core.registry import CPUDispatcher
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.materials import LinearElastic
+from dda.registry import make_solver
+from dda.studies.cases import rock_slope, stepped_table
+
+
+def stack(n):
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-1, -1), (n + 1, -1), (n + 1, 0), (-1, 0)], rock, fixed=True)
+    for i in range(n * n):
+        x, y = float(i % n), float(i // n)
+        scene.add_block([(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)], rock)
+    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                                  friction=CoulombSingle(phi=35.0)))
+    return scene
+
+
+for solver in ("newton", "legacy"):
+    scene, _, _ = rock_slope(CoulombSingle(phi=31.6), stepped_table(670.0, 2.0, 6, 1.0),
+                             shear_penalty=10e9)
+    dda.Simulation(scene, dt=1e-3, solver=make_solver(solver)).run(0.05)
+    dda.Simulation(stack(10), dt=1e-3, solver=make_solver(solver)).run(0.01)
+for name, module in list(sys.modules.items()):
+    if name.startswith("dda"):
+        for attr, obj in vars(module).items():
+            if isinstance(obj, CPUDispatcher) and len(obj.signatures) > 1:
+                print(f"{name}.{attr}: {len(obj.signatures)} versions")
+"""
+
+
+def test_every_kernel_compiles_once_for_both_solvers():
+    """A kernel called with a literal constant, or with a module's read-only array, compiles a
+    second version of itself and of everything it calls (33 kernels did, some 10 s of a cold
+    start). After the demo scene and a 10 x 10 stack (the sparse
+    path) under both solvers each kernel holds one version. A fresh
+    process: other tests call kernels with their own argument types."""
+    import subprocess
+    import sys
+
+    run = subprocess.run([sys.executable, "-c", _ONE_SIGNATURE], capture_output=True, text=True,
+                         timeout=900)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout == ""

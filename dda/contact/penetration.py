@@ -262,8 +262,8 @@ def _untracked_kernel(state, t_n, normal_penalty, depth, pen_vertex, pen_block, 
         twice[k] = spring[k]
         twice[n + k] = spring[k]
     want = pen_vertex * nb + pen_block
-    held_own = np.sqrt(_gather_kernel(own, spring_sq, want, False))
-    held_mirror = _gather_kernel(mirrored, twice, want, True)
+    held_own = np.sqrt(_gather_kernel(own, spring_sq, want, np.bool_(False)))
+    held_mirror = _gather_kernel(mirrored, twice, want, np.bool_(True))
     out = np.empty(want.shape[0])
     for w in range(want.shape[0]):
         out[w] = depth[w] - max(held_own[w], held_mirror[w])
@@ -540,9 +540,10 @@ def _guard_kernel(x, offsets, nxt, prv, block_of, thickness, tolerance, min_thic
     nb = offsets.shape[0] - 1
     if pairs.shape[0] == 0:
         return 0.0, spring, 0.0, False, -1, -1, 0.0, 0.0
-    pv, pk, pd, _ = _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, 0.0, False)
+    pv, pk, pd, _ = _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, 0.0,
+                                           np.bool_(False))
     ev, ek, ed, _ = _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner,
-                                           0.25 * tolerance * min_thickness, True)
+                                           0.25 * tolerance * min_thickness, np.bool_(True))
     deepest = 0.0
     if pd.shape[0]:
         deepest = pd.max()
@@ -580,7 +581,9 @@ def _guard_kernel(x, offsets, nxt, prv, block_of, thickness, tolerance, min_thic
                     keys[q] = edge[c] * (nb + 1) + bj[c]
                     springs[q] = -tn[c] / normal_penalty[c]
                     q += 1
-            held = np.maximum(held, _gather_kernel(keys, springs, ev * (nb + 1) + ek, True))
+            held = np.maximum(
+                held, _gather_kernel(keys, springs, ev * (nb + 1) + ek, np.bool_(True))
+            )
         for i in range(ed.shape[0]):
             r = (ed[i] - held[i]) / (tolerance * min(thickness[block_of[ev[i]]],
                                                      thickness[ek[i]]))

@@ -168,11 +168,11 @@ def upper_data(nnz, block_start, block_count, block_k, free_blocks, pair_start, 
     rows, terms, weights : the contacts' rank-one terms (:class:`PairStiffness`)
     """
     data = np.zeros(nnz)
-    k = np.empty((6, 6))
+    kc = np.empty((12, 12))
+    k = kc[0:6, 0:6]  # typed as the contacts' 6 x 6 views are: _upper_add compiles once
     for s in range(free_blocks.shape[0]):
         k[:, :] = block_k[free_blocks[s]]
-        _upper_add(data, k, block_start[s], block_count[s], -1)
-    kc = np.empty((12, 12))
+        _upper_add(data, k, block_start[s], block_count[s], np.int64(-1))
     for c in range(pair_start.shape[1]):
         _upper_contact(data, kc, pair_start, pair_count, pair_rank, rows, terms, weights, c)
     return data

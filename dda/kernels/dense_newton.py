@@ -245,7 +245,10 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
     d = d.copy()
     zero_known = np.zeros_like(d)
     norms = np.empty(max_iter + 1)
-    n_norms = 0
+    n_norms = np.int64(0)
+    # a global array is read-only inside a kernel: the copy keeps the assembly kernels to the
+    # one compiled version that the Python callers' arrays use
+    tangent_terms = TANGENT_TERMS.copy()
     patterns = np.empty((max_iter + 1, m), dtype=np.int8)
     force_norm = 0.0
     for b in range(free.shape[0]):
@@ -326,12 +329,12 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
         for c in range(m):
             weights[c, 0] = kn[c] if closed[c] else 0.0
         data = matrix_data(n * n, n, block_base, block_step, block_k, free_blocks, pair_base,
-                           pair_step, rows, TANGENT_TERMS, weights)
+                           pair_step, rows, tangent_terms, weights)
         rhs = np.empty(n)
         for s in range(nf):
             for i in range(6):
                 rhs[6 * s + i] = -block_r[free_blocks[s], i]
-        rhs = rhs_data(rhs, side_row, side_block, -residual, zero_known, rows, TANGENT_TERMS,
+        rhs = rhs_data(rhs, side_row, side_block, -residual, zero_known, rows, tangent_terms,
                        weights)
         sol, solved = solve_dense(data, n, rhs, keep, reduced)
         if solved != SOLVED:
@@ -389,7 +392,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
     m = state0.shape[0]
     over, g_pb, _, sliding_pb, t_stick = step_start(state0, kind, mu_s, mu_d, cohesion, face,
                                                     g_se0, slip0, sliding0, t_n0, ps, length)
-    state, held = first_states(state0, over, gap0, gap_tol, False)
+    state, held = first_states(state0, over, gap0, gap_tol, np.bool_(False))
     passes = 0
     solves = 0
     oc_status, oc_passes = CONVERGED, 0
@@ -403,7 +406,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
         calm_limit = retry_patience if settle_friction else patience
         oc_status, oc_passes, d, _, _, _, friction_settled = dense_passes(
             max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after,
-            calm_limit, 0, True,
+            calm_limit, np.int64(0), np.bool_(True),
             block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step,
             side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn,
             ps, kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion,

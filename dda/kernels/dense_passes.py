@@ -162,7 +162,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     lag_memory = np.zeros((m, 3))
     seen = np.empty((max_passes + 1, m), dtype=np.int8)
     seen[0] = state
-    n_seen = 1
+    n_seen = np.int64(1)
     d = d_known.copy()
     gap = np.zeros(m)
     dgs = np.zeros(m)
@@ -274,9 +274,10 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
     # the pull-back of the excess friction, and the stick springs' forces from it
     over, g_se, slip, sliding, t_stick = step_start(state0, kind, mu_s, mu_d, cohesion, face,
                                                     g_se0, slip0, sliding0, t_n0, ps, length)
-    state, held = first_states(state0, over, gap0, gap_tol, True)
+    state, held = first_states(state0, over, gap0, gap_tol, np.bool_(True))
     status, passes, d, state, gap, dgs, _ = dense_passes(
-        max_passes, True, band, rtol, floor, cycle_tension, relax_after, 0, secant_from, False,
+        max_passes, np.bool_(True), band, rtol, floor, cycle_tension, relax_after, np.int64(0),
+        secant_from, np.bool_(False),
         block_k,
         block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
         side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,

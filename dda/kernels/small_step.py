@@ -217,7 +217,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     else:
         (status, passes, d, state, t_n, t_s, g_se_out, slip_out,
          sliding_out) = legacy_dense_step(max_passes, band, rtol, floor, cycle_tension,
-                                          relax_after, 0, secant_from, block_k, block_f,
+                                          relax_after, np.int64(0), secant_from, block_k, block_f,
                                           d_known, n,
                                           block_base, block_step, free_blocks, pair_base,
                                           pair_step, side_row, side_block, keep, reduced, rows,
@@ -241,8 +241,8 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
                 t_s[c] = ps[c] * g_se_out[c]
     # ---- the moves, their checks and the guard (dda.step.step)
     (_, x_new, largest, worst, worst_move, velocity, new_stress, new_rotation,
-     new_centroid) = step_end(x, block, offsets, centroid, d, free, size, v_eff, True, 2.0 / dt,
-                              elasticity, stress, rotation)
+     new_centroid) = step_end(x, block, offsets, centroid, d, free, size, v_eff, np.bool_(True),
+                              2.0 / dt, elasticity, stress, rotation)
     floats[0], floats[1] = largest, worst_move
     ints[7] = worst
     result = OK
