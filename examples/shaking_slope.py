@@ -62,8 +62,12 @@ def slide_along_joint(result, lower, upper) -> np.ndarray:
 
 
 def slide_start(result, slide, creep: float = 1e-5) -> float:
-    """First time the slide exceeds ``creep`` metres beyond its elastic settling."""
-    settled = slide[np.searchsorted(result.time, 0.5)]
+    """First time the slide exceeds ``creep`` metres beyond its elastic settling (its value at
+    0.5 s); nan if it never does, or if the run ends before the settling does."""
+    settled_at = np.searchsorted(result.time, 0.5)
+    if settled_at >= len(slide):
+        return float("nan")
+    settled = slide[settled_at]
     moving = np.flatnonzero(slide - settled > creep)
     return float(result.time[moving[0]]) if len(moving) else float("nan")
 
@@ -116,9 +120,13 @@ def main(argv=None):
     plot(result, lower, upper, accel, out / "slide.png")
     slide = slide_along_joint(result, lower, upper)
     start = slide_start(result, slide)
-    print(f"slide down the joint after {args.duration:g} s: {1e3 * slide[-1]:.2f} mm; it starts "
-          f"at t = {start:.3f} s (table beyond g tan(phi - 15) = "
-          f"{100 * slide_threshold(args.phi):.0f} gal at t = {threshold_time(args):.3f} s)")
+    when = (f"it starts at t = {start:.3f} s" if np.isfinite(start)
+            else "it has not started by the end of the run")
+    t_beyond = threshold_time(args)
+    beyond = f"at t = {t_beyond:.3f} s" if np.isfinite(t_beyond) else "not within the run"
+    print(f"slide down the joint after {args.duration:g} s: {1e3 * slide[-1]:.2f} mm; {when} "
+          f"(table beyond g tan(phi - 15) = {100 * slide_threshold(args.phi):.0f} gal "
+          f"{beyond})")
     print(f"wrote {len(writer.files)} VTU files, {writer.pvd_path} and {out / 'slide.png'}")
     print(result.profile())
     return result, slide

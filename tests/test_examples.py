@@ -180,3 +180,13 @@ def test_bolted_slope_example(tmp_path, capsys):
         assert (tmp_path / name).stat().st_size > 10_000
     assert len((tmp_path / "factors.csv").read_text().splitlines()) == 4
     assert "bolted: StrengthReduction: F = " in capsys.readouterr().out
+
+
+def test_shaking_slope_demo_shorter_than_its_settling(tmp_path, capsys):
+    """A demo run shorter than the 0.5 s of elastic settling the slide is measured from has no
+    slide start to report: it says so (nan) instead of failing at the end of the run."""
+    demo = load("shaking_slope")
+    result, slide = demo.main(["--out", str(tmp_path), "--duration", "0.1"])
+    assert result.time[-1] == pytest.approx(0.1)
+    assert np.isnan(demo.slide_start(result, slide))
+    assert "it has not started by the end of the run" in capsys.readouterr().out
