@@ -212,7 +212,8 @@ def _broad_phase(boxes, margin):
         spread[a] = cmax - cmin
     axis = 0 if spread[0] >= spread[1] else 1
     other = 1 - axis
-    order = np.argsort(lo[:, axis], kind="mergesort")
+    # a contiguous copy: numba's argsort would compile again for a strided column
+    order = np.argsort(lo[:, axis].copy(), kind="mergesort")
     lo_sorted = lo[order, axis]
     stop = np.searchsorted(lo_sorted, hi[order, axis], side="right")
     return _sweep(order, stop, lo[:, other].copy(), hi[:, other].copy())
