@@ -57,11 +57,11 @@ and 127 mm under Newton at these settings, 216 / 147 mm under ``--auto`` (dt 2.4
 ``--auto`` at 4.3e-4 s moved the five cuts' faces 135 / 150 / 143 / 167 / 134 mm in 3 s, at
 2.4e-4 s (3 times the inertia) 136 / 157 / 123 / 131 / 147 and at 1.2e-4 s 206 / 174 / 136 mm
 on seeds 2 / 3 / 4: near their limit these wedges move by tens of percent with the step either
-way. Under ``--auto`` through 10 s (Newton still at 2.4e-4 s) the five cuts had 11 of 208,419
-steps cut (legacy) and none of 208,337 (Newton), in 7.4-9.4 and 10.8-14.0 minutes of CPU a run
-(``results/cut_rate_auto_10s.md``); the face moved 402-716 mm (median), and the two methods
-parted on seeds 1 and 4, once each way: which wedge slides out over 10 s is chaotic at that
-scale.
+way. Under ``--auto`` through 10 s (legacy at 2.4e-4 s, Newton at 4.3e-4 s) the five cuts had
+19 of 208,458 steps cut (legacy) and 1 of 114,117 (Newton), in 9.4-14.2 and 11.1-12.7 minutes
+of CPU a run on a machine about a quarter slower than the figures above
+(``results/cut_rate_auto_10s.md``); the face moved 401-599 mm (median), and which wedge slides
+out over 10 s is chaotic at that scale: the methods part on cuts 2 and 4, by 198 and 73 mm.
 
 Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` (a frame every 0.05 s of simulated time, and
 the run's end) and prints the blocks, how far the blocks of the face moved, and the cost

@@ -49,6 +49,13 @@ The kernels compile on their first call (``cache=True``: once per machine, then 
 files of the helpers it calls; ``import dda`` therefore drops every cached kernel of the
 package once any file with a compiled function is newer than the cache
 (:mod:`dda.kernels.cache`).
+
+Each kernel compiles one version, whichever solver calls it: a kernel calls another with typed
+values (``np.bool_(True)``, ``np.int64(0)``), not literals, which numba would type as
+``Literal[bool]`` or ``Literal[int]`` and compile the callee again for; with a copy of a module's
+constant array (read-only inside a kernel, writable from Python); and with the array layout
+the other callers use. ``tests/test_kernel_cache.py`` checks it (a second version of a kernel
+compiles everything it calls again: a fresh install's first run was 18% longer).
 """
 
 from dda.kernels.pair_stiffness import PairStiffness
