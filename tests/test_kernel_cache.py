@@ -5,6 +5,9 @@ old helper."""
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 
@@ -83,33 +86,23 @@ def test_the_progress_bar_shows_its_note_until_the_first_step():
     assert "0.5000/1.0000" in out.getvalue()
 
 
+ROOT = Path(__file__).resolve().parents[1]
+
 _ONE_SIGNATURE = """
 import sys
 from numba.core.registry import CPUDispatcher
 import dda
-from dda.contact import CoulombSingle, JointMaterial
-from dda.materials import LinearElastic
+from dda.contact import CoulombSingle
 from dda.registry import make_solver
 from dda.studies.cases import rock_slope, stepped_table
-
-
-def stack(n):
-    rock = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
-    scene = dda.Scene(gravity=9.81)
-    scene.add_block([(-1, -1), (n + 1, -1), (n + 1, 0), (-1, 0)], rock, fixed=True)
-    for i in range(n * n):
-        x, y = float(i % n), float(i // n)
-        scene.add_block([(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)], rock)
-    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
-                                  friction=CoulombSingle(phi=35.0)))
-    return scene
+from tests.conftest import stack_scene
 
 
 for solver in ("newton", "legacy"):
     scene, _, _ = rock_slope(CoulombSingle(phi=31.6), stepped_table(670.0, 2.0, 6, 1.0),
                              shear_penalty=10e9)
     dda.Simulation(scene, dt=1e-3, solver=make_solver(solver)).run(0.05)
-    dda.Simulation(stack(10), dt=1e-3, solver=make_solver(solver)).run(0.01)
+    dda.Simulation(stack_scene(10), dt=1e-3, solver=make_solver(solver)).run(0.01)
 for name, module in list(sys.modules.items()):
     if name.startswith("dda"):
         for attr, obj in vars(module).items():
@@ -128,12 +121,8 @@ def test_every_kernel_compiles_once_for_both_solvers(cold, tmp_path):
     cached caller carries its callees' versions inside, and only kernels called from Python
     with two signatures show (the 17 passed so); the ``slow`` run compiles all into an empty
     cache (about 90 s) and finds all 17 on the code before."""
-    import os
-    import subprocess
-    import sys
-
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path)) if cold else None
     run = subprocess.run([sys.executable, "-c", _ONE_SIGNATURE], capture_output=True, text=True,
-                         timeout=900, env=env)
+                         timeout=900, env=env, cwd=ROOT)
     assert run.returncode == 0, run.stderr[-2000:]
     assert run.stdout == ""
