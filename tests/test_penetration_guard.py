@@ -204,12 +204,13 @@ def test_compiled_gather_matches_numpy():
 @pytest.mark.parametrize("high", [3, 4096, 2**30, 2**62])
 def test_the_gathers_order_is_numpys_stable_sort(high):
     """The gather's radix sort orders keys (with many equal ones, over one to six 12-bit
-    digits) as numpy's stable sort does, index for index; negative keys take numba's merge
-    sort, to the same order."""
+    digits) as numpy's stable sort does, index for index; negative keys, and fewer keys than
+    ``RADIX_FROM``, take numba's merge sort, to the same order."""
     from dda.contact import penetration
 
     rng = np.random.default_rng(high % 1000)
-    for n in (0, 1, 7, 5000):
+    radix = penetration.RADIX_FROM
+    for n in (0, 1, 7, radix - 1, radix, 5000):
         keys = rng.integers(0, high, n) if high > 3 else rng.integers(0, high, n) * 3
         np.testing.assert_array_equal(penetration._stable_order(keys),
                                       np.argsort(keys, kind="stable"))
