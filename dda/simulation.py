@@ -63,7 +63,9 @@ class Simulation:
     dt : float or "auto"
         Step size (s). Steps are cut when a step does not converge and grow back afterwards.
         ``"auto"``: chosen from the scene and the solver (:mod:`dda.auto_settings`), as are
-        the penalties of joints given as ``"auto"``; :attr:`choices` says what and why.
+        the penalties of joints given as ``"auto"``; a penalty given as a number shortens it
+        to keep that penalty at the solver's multiple of the lightest free block's inertia
+        (rule 6); :attr:`choices` says what and why.
     solver : NonlinearSolver, optional
         How one step is solved: ``NewtonRaphson()`` (the default, fully implicit) or
         ``LegacyPullBack()`` (original DDA).

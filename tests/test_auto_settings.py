@@ -1,5 +1,7 @@
 """``"auto"`` penalties and dt (dda.auto_settings): what the rule chooses, and its text."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -10,6 +12,7 @@ from dda.effects import AccelerationHistory
 from dda.materials import LinearElastic
 from dda.penalty_advice import SOFT_DEPTH, TARGET_DEPTH
 from dda.solvers import LegacyPullBack, NewtonRaphson
+from tests.conftest import box
 
 ROCK = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
 G = 9.81
@@ -227,6 +230,55 @@ def test_a_given_penalty_stays_and_a_lone_auto_shear_follows_it():
                            dt=1e-3)
     assert given.choices == ""
     assert given.model.joints.shear_penalty.tolist() == [1e8]
+
+
+def _pebble(joint):
+    """A 5 cm square (6.25 kg/m) resting on a fixed slab."""
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=G)
+    scene.add_block(box(0, -0.5, 2, 0.5), rock, fixed=True)
+    scene.add_block(box(0.5, 0.0, 0.05, 0.05), rock, name="pebble")
+    scene.set_joint(joint)
+    return scene
+
+
+@pytest.mark.parametrize("solver, kappa", [(LegacyPullBack(), 3.0), (NewtonRaphson(), 10.0)])
+def test_a_given_stiff_penalty_shortens_an_auto_dt(solver, kappa):
+    """Joints given as 1e11 N/m under a pebble: the fall's dt (7.1e-3 s) would be 144 times
+    its contact period, which the plausibility check warns of, naming dt="auto" as the
+    remedy. An "auto" dt keeps the given penalty at kappa times the pebble's inertia
+    2 m / dt^2 (rule 6), and the pebble rests without a cut step."""
+    mass = 2500.0 * 0.05**2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no warning of a step too long for its contacts
+        sim = dda.Simulation(_pebble(JointMaterial(1e11, 1e11, CoulombSingle(phi=30.0))),
+                             dt="auto", solver=solver)
+    assert sim.dt == pytest.approx(np.sqrt(kappa * 2 * mass / 1e11), rel=1e-12)
+    assert sim.model.joints.normal_penalty.tolist() == [1e11]
+    assert ("dt: shortened to" in sim.choices and "given normal penalty 1e+11 N/m at "
+            f"{kappa:g} x Newmark's inertia" in sim.choices and "block 'pebble'" in sim.choices)
+    result = sim.run(200 * sim.dt, progress=False)
+    assert result.stats.cuts == []
+
+
+def test_a_given_soft_penalty_leaves_an_auto_dt_alone():
+    """1e7 N/m is below 10 x 2 m / dt^2 = 5.1e7 N/m of the fall's dt: that dt stays."""
+    auto = dda.Simulation(column(1), dt="auto")
+    soft = dda.Simulation(column(1, JointMaterial(1e7, 1e7, CoulombSingle(phi=35.0))),
+                          dt="auto")
+    assert soft.dt == auto.dt == pytest.approx(np.sqrt(2 * TARGET_DEPTH * HALF_WIDTH / G))
+    assert "shortened" not in soft.choices
+
+
+def test_beside_a_given_stiff_joint_the_auto_penalty_follows_the_shorter_dt():
+    """One joint given as 1e11 N/m, the other "auto": dt is set by the given one, and the
+    auto one is kappa times the inertia at that dt, the same 1e11 N/m."""
+    scene = column(2)
+    scene.set_joint(JointMaterial(1e11, 1e11, CoulombSingle(phi=35.0)), between=("b0", "b1"))
+    sim = dda.Simulation(scene, dt="auto")
+    kappa = NewtonRaphson.auto_kappa
+    assert sim.dt == pytest.approx(np.sqrt(kappa * 2 * MASS / 1e11), rel=1e-12)
+    np.testing.assert_allclose(sim.model.joints.normal_penalty, 1e11, rtol=1e-9)
 
 
 def test_nothing_sets_a_time_scale_without_gravity_or_shaking():
