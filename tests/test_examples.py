@@ -78,6 +78,12 @@ def test_jointed_slope_example(tmp_path, capsys):
                                   "--auto"])
     assert "auto" in capsys.readouterr().out
     assert np.all(np.isfinite(moved)) and moved.max() < 0.05
+    # --dt auto: the joints' 5e10 N/m kept, dt chosen for it (3 x the lightest block's inertia)
+    result, _, moved = demo.main(["--out", str(tmp_path / "auto_dt"), "--duration", "0.002",
+                                  "--dt", "auto"])
+    assert "shortened to 0.000149 s to keep the joints' given normal penalty 5e+10 N/m" in (
+        capsys.readouterr().out)
+    assert np.all(np.isfinite(moved)) and result.stats["dt"].max() <= 1.5e-4
 
 
 def test_jointed_slope_other_cuts(tmp_path, capsys):
