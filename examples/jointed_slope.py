@@ -6,10 +6,11 @@ into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``)
 thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
 shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 
-With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 25 s: 931
-steps, 40 of them cut because OPEN-CLOSE did not settle in 30 passes (9.1 passes a step), and
-the face blocks end 21.9 mm (median) and 26.5 mm (most) from where they started relative to
-the base. ``--solver newton``: about 40 s, 722 steps, 31 cut, 21.8 / 26.5 mm. The penalty is
+With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 27 s: 912
+steps, 45 of them cut because OPEN-CLOSE did not settle in 30 passes, and the face blocks end
+22.0 mm (median) and 27.6 mm (most) from where they started relative to the base.
+``--solver newton``: about 38 s, 656 steps, 28 cut, 21.7 / 26.5 mm (the two side by side on
+two cores, the session of 2026-12-06). The penalty is
 stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x 1.6 m block's contact
 period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the contacts settle only at a
 fraction of the 2e-3 s asked for and the steps average 3.2e-4 s; ``dda.PenaltyWarning`` says so
