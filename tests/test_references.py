@@ -86,6 +86,23 @@ def test_jumps_in_the_table_acceleration_are_honoured():
                                rtol=1e-10, atol=1e-15)
 
 
+def test_a_stuck_phase_reads_the_table_once_a_max_step():
+    """The block's rest is not integrated: over 10 s of a gentle table the static strength is
+    read every max_step (10,001 readings, an ODE solver's event search read it twice a step),
+    and a crossing inside the phase is still found to round-off."""
+    calls = []
+
+    def gentle(t):
+        calls.append(t)
+        return (0.7 * G * np.sin(6 * t), 0.0)
+
+    ref = sliding_block(gentle, np.linspace(0, 10, 11), mu_static=0.75, max_step=1e-3)
+    assert ref.events == [] and len(calls) <= 10_001 + 5
+    # the crossing: a_x = 0.8 g sin(6 t) passes mu g at t = asin(0.75 / 0.8) / 6
+    ref = sliding_block(lambda t: (0.8 * G * np.sin(6 * t), 0.0), np.linspace(0, 0.3, 4), 0.75)
+    assert ref.events[0][0] == pytest.approx(np.arcsin(0.75 / 0.8) / 6, abs=1e-13)
+
+
 @pytest.mark.parametrize("kwargs, message", [
     ({"mu_dynamic": 0.5}, "mu_dynamic"), ({"dip": 95}, "dip"), ({"mu_static": -1}, "mu_static"),
 ])

@@ -19,6 +19,8 @@ from scipy.optimize import brentq
 
 from dda._checks import finite_number
 
+_ROOT_TOL = 4 * np.finfo(float).eps  # the event search's tolerance in scipy's solve_ivp
+
 __all__ = ["SlidingHistory", "sliding_block", "housner_restitution", "housner_rocking",
            "RockingHistory", "housner_shaken"]
 
@@ -76,9 +78,11 @@ def sliding_block(
       slides on, in the direction of ``D``.
 
     With a horizontal plane this is the A appendix's solution of a block on a moving table:
-    ``a_2 = a_1`` while stuck, ``a_2 = mu g sgn(v_1 - v_2)`` while sliding. Each phase is
-    integrated with an adaptive Runge-Kutta method (DOP853) and its end is located as an event
-    (root of ``s'`` or of ``|D| - mu_s N``), so the switching instants are exact to ``rtol``.
+    ``a_2 = a_1`` while stuck, ``a_2 = mu g sgn(v_1 - v_2)`` while sliding. A sliding phase is
+    integrated with an adaptive Runge-Kutta method (DOP853) and its end located as an event
+    (a root of ``s'``); a stuck phase needs no integration: ``|D| - mu_s N`` is read every
+    ``max_step`` and its root located by Brent's method. The switching instants are exact to
+    round-off, the slip to ``rtol``.
 
     Parameters
     ----------
@@ -94,8 +98,9 @@ def sliding_block(
     gravity : float
         g, m/s^2.
     max_step : float
-        Largest integration step (s): the event search looks for sign changes between steps,
-        so it must be shorter than the shortest stick or slip phase of interest.
+        Largest integration step, and the spacing at which a stuck phase reads the static
+        strength (s): the search for a phase's end looks for sign changes from one step to
+        the next, so it must be shorter than the shortest stick or slip phase of interest.
     breakpoints : sequence of float
         Times where the table acceleration jumps; phases are split there.
     rtol : float
@@ -159,33 +164,45 @@ def sliding_block(
         later = [c for c in cuts if c > t + 1e-12]
         return later[0] if later else t_end
 
+    def beyond(tt):
+        """How far the drive is beyond the static strength, down and up the dip (m/s^2)."""
+        d, n = drive_and_pressure(tt)
+        return d - mu_s * n, -d - mu_s * n
+
+    def stuck_until(t0, stop):
+        """The end of a stuck phase that starts at ``t0`` (at most ``stop``) and the direction
+        of the slide that ends it (0.0: none before ``stop``). The static strength is checked
+        every ``max_step`` and a crossing located by Brent's method, as an ODE solver's event
+        search would do, without integrating the block's rest."""
+        a, g_a = t0, beyond(t0)
+        k = 1
+        while a < stop:
+            b = min(t0 + k * max_step, stop)
+            g_b = beyond(b)
+            roots = [(brentq(lambda tt, i=i: beyond(tt)[i], a, b, xtol=_ROOT_TOL,
+                             rtol=_ROOT_TOL), 1.0 - 2.0 * i)
+                     for i in (0, 1) if g_a[i] <= 0.0 <= g_b[i]]
+            if roots:
+                return min(roots)
+            a, g_a = b, g_b
+            k += 1
+        return stop, 0.0
+
     t, s, v = float(times[0]), 0.0, 0.0
     direction = 0.0  # 0: stuck, +-1: sliding down / up the dip
     while t < t_end - 1e-12:
         stop = segment_end(t)
         if direction == 0.0:
-            def beyond_up(tt, y):
-                d, n = drive_and_pressure(tt)
-                return d - mu_s * n
-
-            def beyond_down(tt, y):
-                d, n = drive_and_pressure(tt)
-                return -d - mu_s * n
-
-            for ev in (beyond_up, beyond_down):
-                ev.terminal, ev.direction = True, 1.0
             d0, n0 = drive_and_pressure(t)
             if abs(d0) > mu_s * n0:  # already beyond the static strength
                 direction = float(np.sign(d0))
                 events.append((t, "slide " + ("+" if direction > 0 else "-")))
                 continue
-            sol = solve_ivp(lambda tt, y: [y[1], 0.0], (t, stop), [s, 0.0],
-                            events=(beyond_up, beyond_down), **opts)
-            t1 = float(sol.t[-1])
-            fill(sol, t, t1, False)
-            t, s, v = t1, float(sol.y[0, -1]), 0.0
-            if sol.status == 1:
-                direction = 1.0 if len(sol.t_events[0]) else -1.0
+            t1, direction = stuck_until(t, stop)
+            sel = (times >= t) & (times <= t1)
+            slip[sel], vel[sel], sliding[sel] = s, 0.0, False
+            t, v = t1, 0.0
+            if direction:
                 events.append((t, "slide " + ("+" if direction > 0 else "-")))
         else:
             sign = direction
