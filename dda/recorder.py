@@ -78,7 +78,9 @@ class Recorder:
     ----------
     model : dda.model.Model
     result : dda.result.Result that receives the rows
-    writer : optional writer (``write(frame)``, ``close()``, optionally ``last_time``)
+    writer : optional writer (``write(frame)``, ``close()``, optionally ``last_time``, and
+        ``due(time)`` with ``skip(time)``: a frame the writer says is not due is not built,
+        only counted, as :class:`dda.io.VTUWriter` thins a series)
     every : record every this many steps
     written : ``(writer, time)`` of the last frame written by an earlier run of the same
         simulation: a run that goes on starts at that frame and must not write it twice
@@ -116,10 +118,14 @@ class Recorder:
         if written != state.time:
             # a series thinned by its writer (VTUWriter's every, interval) ends at the
             # run's end
-            if end and (getattr(writer, "every", 1) > 1
-                        or getattr(writer, "interval", None) is not None):
+            last = end and (getattr(writer, "every", 1) > 1
+                            or getattr(writer, "interval", None) is not None)
+            due = getattr(writer, "due", None) if hasattr(writer, "skip") else None
+            if last:
                 writer.write(frame(self.model, state), last=True)
-            else:
+            elif due is None or due(state.time):
                 writer.write(frame(self.model, state))
+            else:  # (a frame the writer would not write: not built)
+                writer.skip(state.time)
             self.result.frames_written += 1
             self.written = (writer, state.time)

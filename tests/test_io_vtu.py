@@ -82,6 +82,41 @@ def test_a_series_written_at_an_interval_of_simulated_time(tmp_path, rock):
     assert [t for t, _ in uneven._entries] == [0.0, 0.002, 0.0045, 0.0062]
 
 
+class _EveryFrame:
+    """A writer that takes every frame and hands it on (a writer without ``due``)."""
+
+    def __init__(self, inner):
+        self.inner, self.every, self.interval = inner, inner.every, inner.interval
+
+    def write(self, frame, last=False):
+        self.inner.write(frame, last=last)
+
+    def close(self):
+        self.inner.close()
+
+
+@pytest.mark.parametrize("kwargs", [{"interval": 1e-3}, {"every": 4}])
+def test_a_thinned_series_builds_only_the_frames_it_writes(tmp_path, rock, monkeypatch, kwargs):
+    """The recorder asks the writer whether a frame is due before it builds it: over 25
+    steps a writer thinned to every 1.2 ms (or every 4th step) costs 10 (or 8) frames, not 26,
+    and writes the same files as when it is handed every frame."""
+    import dda.recorder as recorder
+
+    built = []
+    build = recorder.frame
+    monkeypatch.setattr(recorder, "frame", lambda *a: built.append(1) or build(*a))
+    thinned = dda.io.VTUWriter(tmp_path / "thinned" / "case", **kwargs)
+    dda.Simulation(_two_blocks(rock), dt=4e-4).run(duration=0.01, output=thinned)
+    assert len(built) == len(thinned.files) == (10 if "interval" in kwargs else 8)
+    built.clear()
+    handed = dda.io.VTUWriter(tmp_path / "handed" / "case", **kwargs)
+    dda.Simulation(_two_blocks(rock), dt=4e-4).run(duration=0.01, output=_EveryFrame(handed))
+    assert len(built) == 26
+    assert [e[0] for e in handed._entries] == [e[0] for e in thinned._entries]
+    for a, b in zip(handed.files, thinned.files, strict=True):
+        assert a.name == b.name and a.read_bytes() == b.read_bytes()
+
+
 @pytest.mark.parametrize("kwargs", [{"interval": 0.0}, {"interval": -1.0},
                                     {"interval": float("nan")}, {"interval": 1e-3, "every": 2}])
 def test_an_interval_must_be_a_positive_time_and_alone(tmp_path, kwargs):

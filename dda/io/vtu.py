@@ -157,12 +157,7 @@ class VTUWriter:
         (``last_time`` tells a resumed run which frame the writer has).
         """
         n = self._n
-        if self.interval is not None:
-            # (a relative slack: frame times are sums of steps, 0.05 may come as 0.0499999...)
-            due = n == 0 or frame.time >= self._entries[n - 1][0] + self.interval * (1 - 1e-9)
-        else:
-            due = self._seen % self.every == 0
-        if due or last:
+        if self.due(frame.time) or last:
             name = f"{self.prefix.name}_{n:05d}.vtu"
             path = self.prefix.parent / name
             tmp = path.with_name(path.name + ".tmp.vtu")
@@ -174,7 +169,21 @@ class VTUWriter:
             self._n, self._seen, self.last_time = n, self._seen + 1, frame.time
             self._index_last()
             return
-        self._n, self._seen, self.last_time = n, self._seen + 1, frame.time
+        self.skip(frame.time)
+
+    def due(self, time: float) -> bool:
+        """Whether :meth:`write` would write a file for a frame at ``time`` (s) given now
+        (the run's ``last`` frame always is). A recorder asks before it builds the frame: a
+        thinned series costs no frame for the steps it skips."""
+        n = self._n
+        if self.interval is not None:
+            # (a relative slack: frame times are sums of steps, 0.05 may come as 0.0499999...)
+            return n == 0 or time >= self._entries[n - 1][0] + self.interval * (1 - 1e-9)
+        return self._seen % self.every == 0
+
+    def skip(self, time: float) -> None:
+        """Count a frame at ``time`` that is not :meth:`due`, as :meth:`write` would."""
+        self._seen, self.last_time = self._seen + 1, time
 
     def close(self) -> None:
         """Write the .pvd index of every file written."""
