@@ -20,7 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from dda.kernels.geometry import edge_terms, moments_about_centroid
+from dda.kernels.geometry import edge_sums as _edge_sums
+from dda.kernels.geometry import moments_about_centroid
 from dda.kernels.geometry import self_intersections as _self_intersections
 
 __all__ = [
@@ -103,10 +104,8 @@ def edge_sums(vertices: np.ndarray, offsets: np.ndarray, nxt: np.ndarray) -> np.
     """(n_blocks, 6) each block's edge terms of :func:`polygon_integrals`, summed: ``sum c``,
     ``sum c (x1 + x2)``, ... from the block's first vertex (float64 contiguous ``vertices``,
     int64 ``offsets``)."""
-    # the terms compiled (the same arithmetic in the same order: the same bits as numpy's,
-    # six times faster on a few blocks); the sums stay numpy's
-    terms = edge_terms(vertices, offsets, np.asarray(nxt, dtype=np.int64))
-    return np.add.reduceat(terms, offsets[:-1], axis=0)
+    # compiled: the same arithmetic and sums in the same order as numpy's, to the bit
+    return _edge_sums(vertices, offsets, np.asarray(nxt, dtype=np.int64))
 
 
 def t_matrix(points: np.ndarray, centroids: np.ndarray) -> np.ndarray:

@@ -51,7 +51,7 @@ from dda.contact.penetration import (
 )
 from dda.contact.tangent import SPRING_TERMS
 from dda.errors import SimulationError
-from dda.kernels.blocks import step_end, step_start
+from dda.kernels.blocks import step_end, step_start_at
 from dda.kernels.dashpot import dashpot_stiffnesses
 from dda.kernels.open_close import as_float64
 from dda.kernels.small_step import FALLBACK, MOVED, NOT_SOLVED, TOO_FAR, UNTRACKED, contact_step
@@ -709,14 +709,12 @@ def _advanced(model, state, dt, sol, centroid, ended: _Ended, v_eff, known,
 
 def _plain_start(model, state, dt, carry):
     """The blocks' integrals, effective system, carried velocity (None in a static step) and
-    largest predicted vertex speed, from :func:`dda.kernels.blocks.step_start`."""
+    largest predicted vertex speed, from :func:`dda.kernels.blocks.step_start_at`."""
     x = state.x
-    offsets = model.offsets
-    s = geometry.edge_sums(x, offsets, model.topo.nxt)
-    area, centroid, sxx, syy, sxy, k_eff, f_eff, v_eff, speed = step_start(
-        s, x[offsets[:-1]], model.density, model.elasticity, float(model.gravity or 0.0),
-        state.stress, x, model.topo.block, state.velocity, float(carry), 2.0 / dt**2,
-        2.0 / dt, bool(carry))
+    area, centroid, sxx, syy, sxy, k_eff, f_eff, v_eff, speed = step_start_at(
+        x, model.offsets, model.topo.nxt, model.density, model.elasticity,
+        float(model.gravity or 0.0), state.stress, model.topo.block, state.velocity,
+        float(carry), 2.0 / dt**2, 2.0 / dt, bool(carry))
     ints = geometry.PolygonIntegrals(area=area, centroid=centroid, sxx=sxx, syy=syy, sxy=sxy)
     return ints, k_eff, f_eff, (v_eff if carry else None), speed
 

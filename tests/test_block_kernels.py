@@ -8,8 +8,8 @@ import pytest
 
 import dda
 from dda import geometry, step
-from dda.kernels.blocks import step_end, step_start
-from dda.kernels.geometry import edge_terms
+from dda.kernels.blocks import step_end, step_start, step_start_at
+from dda.kernels.geometry import edge_sums, edge_terms
 from dda.solvers.newmark import effective_system, updated_velocity
 from tests.stability import scenes as S
 
@@ -25,6 +25,33 @@ def _blocks(rng, nb):
         xs.append(c + r * np.stack([np.cos(angles), np.sin(angles)], axis=1))
         offsets.append(offsets[-1] + n)
     return np.concatenate(xs), np.array(offsets, dtype=np.int64)
+
+
+@pytest.mark.parametrize("counts", [(3, 4, 7), (8, 9, 15, 16, 17), (100, 128, 129, 130),
+                                    (250, 300, 5)])
+def test_edge_sums_are_numpys_reduceat_to_the_bit(counts):
+    """Blocks of 3 to 300 vertices (numpy's pairwise summation: under 8 terms one by one, up
+    to 128 in eight running sums, halves above): the compiled sums have reduceat's bits, and
+    the step's start from the vertices is the step's start from those sums."""
+    rng = np.random.default_rng(sum(counts))
+    xs, offsets = [], [0]
+    for n in counts:
+        angles = np.sort(rng.uniform(0.0, 2 * np.pi, n))
+        xs.append(rng.uniform(-50, 50, 2) + rng.uniform(0.2, 2.0) * np.stack(
+            [np.cos(angles), np.sin(angles)], axis=1))
+        offsets.append(offsets[-1] + n)
+    x, offsets = np.concatenate(xs), np.array(offsets, dtype=np.int64)
+    nxt = geometry.next_vertex_index(offsets)
+    s = np.add.reduceat(edge_terms(x, offsets, nxt), offsets[:-1], axis=0)
+    np.testing.assert_array_equal(edge_sums(x, offsets, nxt), s)
+    nb = len(counts)
+    block = np.repeat(np.arange(nb), np.diff(offsets))
+    args = (rng.uniform(1e3, 3e3, nb), rng.normal(0.0, 1e9, (nb, 3, 3)), 9.81,
+            rng.normal(0.0, 1e6, (nb, 3)))
+    rest = (x, block, rng.normal(0.0, 1.0, (nb, 6)), 0.9, 2e6, 2e3, True)
+    for a, b in zip(step_start_at(x, offsets, nxt, *args, *rest[1:]),
+                    step_start(s, x[offsets[:-1]], *args, *rest), strict=True):
+        np.testing.assert_array_equal(a, b)
 
 
 @pytest.mark.parametrize("seed", range(6))

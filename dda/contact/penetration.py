@@ -39,6 +39,7 @@ from dda.contact.detection import (
 )
 from dda.kernels.geometry import vertex_turns
 from dda.kernels.kinematics import _frame
+from dda.kernels.sums import run_sum
 
 __all__ = ["GuardReport", "Penetrations", "penetration_guard", "vertex_penetrations",
            "edge_penetrations", "untracked_depth", "untracked_edge_depth",
@@ -294,10 +295,8 @@ def _gather_kernel(keys, values, want, use_max):
             acc = values[order[lo]]
             for j in range(lo + 1, end):
                 acc = max(acc, values[order[j]])
-        elif end - lo == 1:
-            acc = values[order[lo]]
         else:
-            acc = values[order[lo]] + _pairwise_sum(values, order, lo + 1, end - lo - 1)
+            acc = run_sum(values, order, lo, end)
         out[w] = acc
     return out
 
@@ -338,35 +337,6 @@ def _stable_order(keys):
         shift += 12
         if shift >= 63 or (top >> shift) == 0:
             return order
-
-
-@njit(cache=True)
-def _pairwise_sum(values, order, start, n):
-    """numpy's pairwise summation of ``values[order[start:start + n]]`` (its order of
-    additions: eight running sums in blocks of 128 and fewer, halves above)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += values[order[start + i]]
-        return res
-    if n <= 128:
-        r = np.empty(8)
-        for j in range(8):
-            r[j] = values[order[start + j]]
-        i = 8
-        while i < n - n % 8:
-            for j in range(8):
-                r[j] += values[order[start + i + j]]
-            i += 8
-        res = (r[0] + r[1]) + (r[2] + r[3]) + ((r[4] + r[5]) + (r[6] + r[7]))
-        while i < n:
-            res += values[order[start + i]]
-            i += 1
-        return res
-    half = n // 2
-    half -= half % 8
-    return (_pairwise_sum(values, order, start, half)
-            + _pairwise_sum(values, order, start + half, n - half))
 
 
 def untracked_penetrations(pen: Penetrations, contacts, normal_penalty: np.ndarray,

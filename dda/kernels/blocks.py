@@ -8,8 +8,8 @@ a 2-block step, against a few with these kernels). The kernels do the numpy vers
 arithmetic in its order: ``numpy.einsum``'s sums over a 6 x 6 (or 3 x 3) matrix times a vector
 add the even and the odd terms apart and then the two, ``(p0 + p2 + p4) + (p1 + p3 + p5)``,
 and so do the kernels, so a step gives the same bits either way
-(``tests/test_block_kernels.py`` compares them). The sums over a block's edges
-(``numpy.add.reduceat``) stay numpy's.
+(``tests/test_block_kernels.py`` compares them). The sums over a block's edges are
+``numpy.add.reduceat``'s, in its order (:func:`dda.kernels.geometry.edge_sums`).
 
 Only a scene whose blocks have no damping, point loads or constraint springs takes these
 kernels (:attr:`dda.model.Model.plain_blocks`); the others keep the numpy path, which adds
@@ -23,9 +23,9 @@ import math
 import numpy as np
 from numba import njit
 
-from dda.kernels.geometry import moments_about_centroid
+from dda.kernels.geometry import edge_sums, moments_about_centroid
 
-__all__ = ["step_start", "step_end"]
+__all__ = ["step_start", "step_start_at", "step_end"]
 
 
 @njit(cache=True)
@@ -106,6 +106,20 @@ def step_start(s, first, density, elasticity, gravity, stress, x, block, velocit
         if h > speed or p == 0:
             speed = h
     return area, centroid, sxx, syy, sxy, k_eff, f_eff, v_eff, speed
+
+
+@njit(cache=True)
+def step_start_at(x, offsets, nxt, density, elasticity, gravity, stress, block, velocity, carry,
+                  c_mass, c_vel, dynamic):
+    """:func:`step_start` from the vertices ``x`` (the blocks' ``offsets`` and next-vertex
+    table ``nxt``): their edge sums (:func:`dda.kernels.geometry.edge_sums`) and first
+    vertices taken here, in the same call."""
+    first = np.empty((offsets.shape[0] - 1, 2))
+    for b in range(first.shape[0]):
+        first[b, 0] = x[offsets[b], 0]
+        first[b, 1] = x[offsets[b], 1]
+    return step_start(edge_sums(x, offsets, nxt), first, density, elasticity, gravity, stress,
+                      x, block, velocity, carry, c_mass, c_vel, dynamic)
 
 
 @njit(cache=True)
