@@ -364,9 +364,8 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
         return None
     joints = model.joints
     with section("solve"):
-        (status, counts, numbers_out, d, norms, trial_state, xi0, t_n, t_s, g_se, slip,
-         sliding_out, x_new, velocity, stress, rotation, centroid, pn, dashpot, ps,
-         shear_dashpot) = contact_step(
+        (status, counts, numbers_out, d, norms, trial_state, rows, x_new, velocity, stress,
+         rotation, centroid) = contact_step(
             newton, state.x, model.offsets, model.topo.nxt, model.topo.prv, model.topo.block,
             model.free, model.thickness, model.size, model.density, model.elasticity,
             state.stress, state.rotation, ints.centroid, ints.area, ints.sxx, ints.syy, v_eff,
@@ -388,6 +387,7 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
             _FACE_COS, bool(newton_module.NOISE_FLOOR))
     if status == FALLBACK:
         return None
+    xi0, t_n, t_s, g_se, slip, sliding_out = rows[:6]
     (solver_status, oc_status, oc_passes, passes, iterations, solves, n_pairs, worst, gv, gk,
      on_edge) = counts.tolist()
     largest, worst_move, scale, deepest, spring, untracked, gdepth, gtol = numbers_out.tolist()

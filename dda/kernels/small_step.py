@@ -84,9 +84,10 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     floats : (the largest move, the worst block's move, the residual scale, the guard's
         deepest, spring and untracked depths, its depth and tolerance)
     d, norms : the increments, Newton's residual norms
-    state, xi0, t_n, t_s, g_se, slip, sliding : the trial contacts
+    state : the trial contacts' states
+    rows : (6, m) the trial contacts' ``xi0, t_n, t_s, g_se, slip, sliding``
+        (:func:`_contact_rows`)
     x_new, velocity, new_stress, new_rotation, new_centroid : the blocks at the step's end
-    pn, dashpot, ps, shear_dashpot : the contacts' penalties and dashpots (empty: none)
     """
     nb = offsets.shape[0] - 1
     m0 = c_vertex.shape[0]
@@ -94,9 +95,6 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     floats = np.zeros(8)
     e0 = np.zeros(0)
     e1 = np.zeros((0, 2))
-    nothing = (ints, floats, np.zeros((nb, 6)), e0, np.zeros(0, dtype=np.int8), e0, e0, e0,
-               e0, e0, e0, e1, np.zeros((nb, 6)), np.zeros((nb, 3)), np.zeros(nb), e1, e0, e0,
-               e0, e0)
     # ---- detection (dda.step._detect)
     spring = deepest_spring(c_state, c_t_n, c_bj, c_bk, nb, pair_keys, pair_joint, default,
                             pn_table)
@@ -107,16 +105,16 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     pairs = _pairs_with_free_block(_broad_phase(boxes, margin), free)
     ints[6] = pairs.shape[0]
     if pairs.shape[0] == 0:
-        return (FALLBACK,) + nothing
+        return (FALLBACK,) + _nothing(nb)
     (vertex, edge, bj, bk, p1, p2, p3, edge_length, tau, normal, gap,
      xi) = _narrow_phase_kernel(x, offsets, nxt, prv, block, pairs, boxes,
                                 max(d0, pen_limit), d0, pen_limit, sunk)
     m = vertex.shape[0]
     if m == 0 or m != m0:
-        return (FALLBACK,) + nothing
+        return (FALLBACK,) + _nothing(nb)
     for c in range(m):
         if vertex[c] != c_vertex[c] or edge[c] != c_edge[c]:
-            return (FALLBACK,) + nothing
+            return (FALLBACK,) + _nothing(nb)
     n_closed = 0
     for c in range(m):
         if c_state[c] != 0:
@@ -132,7 +130,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         lost, turned, _ = _stale_closed(vertex, edge, bk, closed_vertex, closed_edge, block,
                                         nxt, prv, nb, x)
         if lost.shape[0] or turned.shape[0]:
-            return (FALLBACK,) + nothing
+            return (FALLBACK,) + _nothing(nb)
     # the contacts carried over whole (dda.contact.contacts._carried_whole)
     state0 = c_state.copy()
     xi0 = c_xi0.copy()
@@ -150,7 +148,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     joint = joint_rows(bj, bk, nb, pair_keys, pair_joint, default)
     for c in range(m):
         if joint[c] < 0:
-            return (FALLBACK,) + nothing  # no joint: the composed step says which pair
+            return (FALLBACK,) + _nothing(nb)  # no joint: the composed step says which pair
     for c in range(m):
         if state0[c] == 0:  # a fresh contact: its law's initial history
             g_se[c], slip[c], sliding[c] = init[0], init[1], init[2]
@@ -227,12 +225,10 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
                                           g_se, slip, sliding, t_n0, gap_tol)
         ints[0], ints[3], ints[4], ints[5] = status, passes, passes, passes
         solved = status == 0
-    out_dashpot = dashpot if has_dashpot else e0
-    out_shear = shear_dashpot if has_shear else e0
     if not solved:
-        return (NOT_SOLVED, ints, floats, d, norms, state, xi0, t_n, t_s, g_se_out, slip_out,
-                sliding_out, e1, np.zeros((nb, 6)), np.zeros((nb, 3)), np.zeros(nb), e1, pn,
-                out_dashpot, ps, out_shear)
+        return (NOT_SOLVED, ints, floats, d, norms, state,
+                _contact_rows(xi0, t_n, t_s, g_se_out, slip_out, sliding_out),
+                e1, np.zeros((nb, 6)), np.zeros((nb, 3)), np.zeros(nb), e1)
     if has_shear:  # dda.contact.dashpot.shear_dashpot_end
         for c in range(m):
             if state[c] != 0:
@@ -260,6 +256,30 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         ints[8], ints[9], ints[10] = gv, gk, 1 if on_edge else 0
         if untracked > 1.0:
             result = UNTRACKED
-    return (result, ints, floats, d, norms, state, xi0, t_n, t_s, g_se_out, slip_out,
-            sliding_out, x_new, velocity, new_stress, new_rotation, new_centroid, pn,
-            out_dashpot, ps, out_shear)
+    return (result, ints, floats, d, norms, state,
+            _contact_rows(xi0, t_n, t_s, g_se_out, slip_out, sliding_out),
+            x_new, velocity, new_stress, new_rotation, new_centroid)
+
+
+@njit(cache=True)
+def _contact_rows(xi0, t_n, t_s, g_se, slip, sliding):
+    """(6, m) the trial contacts' ``xi0, t_n, t_s, g_se, slip, sliding`` as rows: one array to
+    hand back, where six cost six conversions to numpy arrays (half a us each)."""
+    rows = np.empty((6, xi0.shape[0]))
+    rows[0, :] = xi0
+    rows[1, :] = t_n
+    rows[2, :] = t_s
+    rows[3, :] = g_se
+    rows[4, :] = slip
+    rows[5, :] = sliding
+    return rows
+
+
+@njit(cache=True)
+def _nothing(nb):
+    """The outputs after the status of a step that returns before it has solved anything."""
+    e0 = np.zeros(0)
+    e1 = np.zeros((0, 2))
+    return (np.zeros(11, dtype=np.int64), np.zeros(8), np.zeros((nb, 6)), e0,
+            np.zeros(0, dtype=np.int8), np.zeros((6, 0)), e1, np.zeros((nb, 6)),
+            np.zeros((nb, 3)), np.zeros(nb), e1)
