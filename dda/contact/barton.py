@@ -26,6 +26,8 @@ MOBILIZATION_SLIP = np.array([0.0, 0.3, 0.6, 1.0, 2.0, 4.0, 10.0, 100.0])
 #: (it makes the mobilized angle zero at zero slip) and is filled in per contact.
 MOBILIZATION_JRC = np.array([np.nan, 0.0, 0.75, 1.0, 0.85, 0.70, 0.50, 0.0])
 
+#: the table's JRC ratios with the first, per-contact entry as 0 (it enters as a zero angle)
+_MOBILIZATION_M = np.nan_to_num(MOBILIZATION_JRC)
 _LN10 = np.log(10.0)
 _RAD = np.pi / 180.0
 #: relative tolerance of the scalar return-map equation (round-off of the shear force)
@@ -190,7 +192,7 @@ class BartonBandis(FrictionLaw):
         safe = np.where(positive, sigma_n, 1.0)
         raw = np.where(positive, self.jrc * np.log10(self.jcs / safe), np.inf)
         top = self.max_angle - self.phi_r
-        i = np.clip(raw, 0.0, top)
+        i = np.minimum(np.maximum(raw, 0.0), top)  # (np.clip: the same, 6 us slower)
         inside = positive & (raw > 0.0) & (raw < top)
         di = np.where(inside, -self.jrc / (safe * _LN10), 0.0)
         return i, di
@@ -214,11 +216,11 @@ class BartonBandis(FrictionLaw):
         Barton's table in ``r``, held at the residual ``phi_r`` beyond its last entry.
         """
         knots = MOBILIZATION_SLIP
-        k = np.clip(np.searchsorted(knots, r, side="right") - 1, 0, len(knots) - 2)
+        k = np.minimum(np.maximum(np.searchsorted(knots, r, side="right") - 1, 0), len(knots) - 2)
         beyond = r >= knots[-1]
         w = np.where(beyond, 1.0, (r - knots[k]) / (knots[k + 1] - knots[k]))
         # angle at the knots: phi_r + m_k i, except 0 at r = 0 (m_0 = -phi_r / i)
-        m = np.nan_to_num(MOBILIZATION_JRC)  # m_0 enters through the zero angle below
+        m = _MOBILIZATION_M  # m_0 enters through the zero angle below
         at_k = np.where(k == 0, 0.0, self.phi_r + m[k] * i)
         at_k1 = self.phi_r + m[k + 1] * i
         phi = at_k + w * (at_k1 - at_k)
@@ -284,18 +286,26 @@ class BartonBandis(FrictionLaw):
         """
         lo, hi = np.zeros_like(a), a / penalty
         lam = lo.copy()
+        # each iteration works on the contacts not yet converged (``active``): one contact
+        # bisecting at a kink of the table took all of a call's thousand contacts through 45
+        # iterations; each contact's numbers are its own, so they are the same either way
+        active = np.arange(len(a))
         for _ in range(_RETURN_MAX_ITER):
-            s, _, ds_dk, _ = self.shear_strength(pressure, length, kappa + lam)
-            f = a - penalty * lam - s
-            done = np.abs(f) <= _RETURN_TOL * a
-            if done.all():
+            lam_a, a_a, p_a = lam[active], a[active], penalty[active]
+            s, _, ds_dk, _ = self.shear_strength(pressure[active], length[active],
+                                                 kappa[active] + lam_a)
+            f = a_a - p_a * lam_a - s
+            going = np.abs(f) > _RETURN_TOL * a_a
+            if not going.any():
                 return lam
-            lo = np.where(f > 0.0, lam, lo)
-            hi = np.where(f < 0.0, lam, hi)
-            slope = penalty + ds_dk
-            newton = lam + f / np.where(slope > 0.0, slope, 1.0)
-            good = (slope > 0.0) & (newton > lo) & (newton < hi)
-            lam = np.where(done, lam, np.where(good, newton, 0.5 * (lo + hi)))
+            lo_a = np.where(f > 0.0, lam_a, lo[active])
+            hi_a = np.where(f < 0.0, lam_a, hi[active])
+            slope = p_a + ds_dk
+            newton = lam_a + f / np.where(slope > 0.0, slope, 1.0)
+            good = (slope > 0.0) & (newton > lo_a) & (newton < hi_a)
+            active = active[going]
+            lam[active] = np.where(good, newton, 0.5 * (lo_a + hi_a))[going]
+            lo[active], hi[active] = lo_a[going], hi_a[going]
         return lam
 
     def _warn_if_snap_back(self, unstable):
