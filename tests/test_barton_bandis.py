@@ -308,3 +308,51 @@ def test_newton_converges_quadratically_on_a_moving_edge(rotation):
     assert sol.converged
     np.testing.assert_allclose(sol.d, reference.d, rtol=0, atol=1e-12)
     assert convergence_order(sol.residual_norms, floor=1e-7) >= 1.8
+
+
+# --- the compiled return map ------------------------------------------------------------------
+
+@pytest.mark.parametrize("options", [
+    {}, {"mobilized": False}, {"slip_at_peak": 2e-4}, {"block_size": 0.5},
+    {"dilation": True}, {"jrc": 0.0}, {"jrc": 18.0, "max_angle": 60.0},
+])
+def test_compiled_return_map_is_the_numpy_one(options):
+    """dda.kernels.barton against the numpy return map, to the bit, over contacts that stick,
+    slip on every segment of Barton's table and beyond it, stand above JCS, carry no load or
+    are open, with a push either way and softening faster than the penalty."""
+    import dda.contact.barton as barton
+
+    args = {"jrc": 10.0, "jcs": 50e6, "phi_r": 30.0} | options
+    law = BartonBandis(**args)
+    rng = np.random.default_rng(len(repr(options)))
+    m = 400
+    length = rng.uniform(0.01, 0.5, m)
+    sigma = 10.0 ** rng.uniform(2, 8.5, m)  # up to beyond JCS
+    sigma[:20] = 0.0
+    t_n = -sigma * length
+    t_n[20:30] = 1e3  # open
+    peak = law.peak_slip(length) if law.mobilized else np.full(m, 1e-3)
+    committed = law.initial_state(m)
+    committed["slip"] = peak * 10.0 ** rng.uniform(-3, 2.3, m)  # 0.001 to 200 peaks
+    committed["slip"][30:40] = 0.0
+    penalty = 10.0 ** rng.uniform(5, 11, m)
+    committed["g_se"] = rng.normal(0.0, 1.0, m) * sigma * length / penalty
+    if law.dilation:
+        committed["dilation"] = rng.uniform(0.0, 1e-4, m)
+    dgs = rng.normal(0.0, 1.0, m) * 10.0 ** rng.uniform(-7, -3, m)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # the softest penalties snap back
+        compiled = law.return_map(committed, dgs, t_n, penalty, length)
+        barton.COMPILED = False
+        try:
+            numpy = law.return_map(committed, dgs, t_n, penalty, length)
+        finally:
+            barton.COMPILED = True
+    assert 0.2 * m < numpy.slipping.sum() < m - 40
+    for name in ("t_s", "slipping", "strength"):
+        np.testing.assert_array_equal(getattr(compiled, name), getattr(numpy, name), name)
+    assert compiled.state.keys() == numpy.state.keys()
+    for name in numpy.state:
+        np.testing.assert_array_equal(compiled.state[name], numpy.state[name], name)
+    for name in ("ds_dp", "ds_dk"):
+        np.testing.assert_array_equal(compiled.extra[name], numpy.extra[name], name)

@@ -16,6 +16,7 @@ import numpy as np
 
 from dda._checks import finite_number
 from dda.contact.friction import FrictionLaw, FrictionTrial
+from dda.kernels.barton import barton_return_map
 from dda.plausibility import check_angle
 
 __all__ = ["BartonBandis", "MOBILIZATION_SLIP", "MOBILIZATION_JRC"]
@@ -29,6 +30,10 @@ MOBILIZATION_JRC = np.array([np.nan, 0.0, 0.75, 1.0, 0.85, 0.70, 0.50, 0.0])
 #: the table's JRC ratios with the first, per-contact entry as 0 (it enters as a zero angle)
 _MOBILIZATION_M = np.nan_to_num(MOBILIZATION_JRC)
 _LN10 = np.log(10.0)
+_NO_DILATION = np.zeros(0)
+#: Whether a :class:`BartonBandis` of its own class takes the compiled return map
+#: (:mod:`dda.kernels.barton`); False: the numpy one, the reference
+COMPILED = True
 _RAD = np.pi / 180.0
 #: relative tolerance of the scalar return-map equation (round-off of the shear force)
 _RETURN_TOL = 1e-13
@@ -257,6 +262,32 @@ class BartonBandis(FrictionLaw):
     # --- the FrictionLaw interface ------------------------------------------------------------
 
     def return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
+        if COMPILED and type(self) is BartonBandis:
+            return self._compiled_return_map(committed, delta_g_s, t_n, shear_penalty, length)
+        return self._numpy_return_map(committed, delta_g_s, t_n, shear_penalty, length)
+
+    def _compiled_return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
+        """The trial of :meth:`_numpy_return_map` from :func:`dda.kernels.barton.
+        barton_return_map` (the same numbers, contact by contact)."""
+        arrays = [np.asarray(a, dtype=np.float64) for a in (
+            committed["g_se"], committed["slip"],
+            committed["dilation"] if self.dilation else _NO_DILATION, delta_g_s, t_n,
+            shear_penalty, length)]
+        (t_s, slipping, strength, g_se, slip, dilation, ds_dp, ds_dk,
+         unstable) = barton_return_map(
+            *arrays, self.jrc, self.jcs, self.phi_r, self.max_angle, self.mobilized,
+            -1.0 if self.slip_at_peak is None else self.slip_at_peak,
+            -1.0 if self.block_size is None else self.block_size, MOBILIZATION_SLIP,
+            _MOBILIZATION_M, _LN10, _RAD, _RETURN_TOL, _RETURN_MAX_ITER)
+        self._warn_if_snap_back(unstable)
+        state = {"g_se": g_se, "slip": slip}
+        if self.dilation:
+            state["dilation"] = dilation
+        return FrictionTrial(t_s=t_s, slipping=slipping, strength=strength, state=state,
+                             extra={"ds_dp": ds_dp, "ds_dk": ds_dk})
+
+    def _numpy_return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
+        """The return map in numpy, from :meth:`shear_strength` (the reference)."""
         t_trial = shear_penalty * (committed["g_se"] + delta_g_s)
         pressure = np.maximum(-t_n, 0.0)
         kappa = committed["slip"]
@@ -295,7 +326,7 @@ class BartonBandis(FrictionLaw):
             s, _, ds_dk, _ = self.shear_strength(pressure[active], length[active],
                                                  kappa[active] + lam_a)
             f = a_a - p_a * lam_a - s
-            going = np.abs(f) > _RETURN_TOL * a_a
+            going = ~(np.abs(f) <= _RETURN_TOL * a_a)  # (a NaN goes on, as it did)
             if not going.any():
                 return lam
             lo_a = np.where(f > 0.0, lam_a, lo[active])
