@@ -30,14 +30,15 @@ MOBILIZATION_JRC = np.array([np.nan, 0.0, 0.75, 1.0, 0.85, 0.70, 0.50, 0.0])
 #: the table's JRC ratios with the first, per-contact entry as 0 (it enters as a zero angle)
 _MOBILIZATION_M = np.nan_to_num(MOBILIZATION_JRC)
 _LN10 = np.log(10.0)
-_NO_DILATION = np.zeros(0)
-#: Whether a :class:`BartonBandis` of its own class takes the compiled return map
-#: (:mod:`dda.kernels.barton`); False: the numpy one, the reference
-COMPILED = True
 _RAD = np.pi / 180.0
 #: relative tolerance of the scalar return-map equation (round-off of the shear force)
 _RETURN_TOL = 1e-13
 _RETURN_MAX_ITER = 100
+_NO_DILATION = np.zeros(0)
+
+#: Whether a :class:`BartonBandis` of its own class takes the compiled return map
+#: (:mod:`dda.kernels.barton`); False: the numpy one, the reference
+COMPILED = True
 
 
 class BartonBandis(FrictionLaw):

@@ -6,7 +6,7 @@ r5) + (r6 + r7))`` with the remainder added after, and above that the two halves
 multiple of 8) summed apart. ``numpy.add.reduceat`` starts each run from its first value and
 adds the pairwise sum of the others. A kernel that sums in this order gives numpy's bits, so a
 compiled path and a numpy one agree to the bit (``tests/test_block_kernels.py`` checks it on
-runs of 1 to 300 values).
+blocks of 3 to 300 vertices).
 """
 
 from __future__ import annotations
