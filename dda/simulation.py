@@ -66,9 +66,12 @@ class Simulation:
         the penalties of joints given as ``"auto"``; a penalty given as a number shortens it
         to keep that penalty at the solver's multiple of the lightest free block's inertia
         (rule 6); :attr:`choices` says what and why.
-    solver : NonlinearSolver, optional
+    solver : NonlinearSolver or str, optional
         How one step is solved: ``NewtonRaphson()`` (the default, fully implicit) or
-        ``LegacyPullBack()`` (original DDA).
+        ``LegacyPullBack()`` (original DDA); or a solver's registered name with its default
+        settings (``"newton"``, ``"legacy"``, one added by :func:`dda.registry.
+        register_solver`, or an import path ``"module:Class"``; :func:`dda.registry.
+        make_solver`).
     analysis : {"dynamic", "static"}
         "static" sets the velocity to zero at the start of every step (METHOD.md section 2).
     velocity_carry : float
@@ -130,7 +133,7 @@ class Simulation:
     -0.04905
     """
 
-    def __init__(self, scene: Scene, dt: float, solver: NonlinearSolver | None = None,
+    def __init__(self, scene: Scene, dt: float, solver: NonlinearSolver | str | None = None,
                  analysis: str = "dynamic", velocity_carry: float = 1.0,
                  max_open_close: int = 12, record_every: int = 1, output=None,
                  max_displacement_ratio: float = 0.25, penetration_tolerance: float = 0.01,
@@ -147,6 +150,13 @@ class Simulation:
                              f"got {self.dt:g} (a step is seconds, not steps per second)")
         if solver is None:
             solver = NewtonRaphson()
+        elif isinstance(solver, str):
+            from dda.registry import RegistryError, make_solver  # (it imports the solvers)
+
+            try:
+                solver = make_solver(solver)
+            except RegistryError as exc:
+                raise RegistryError(f"Simulation: {exc}") from None
         if not isinstance(solver, NonlinearSolver):
             raise TypeError(f"Simulation: solver must be a NonlinearSolver, got {solver!r}")
         if analysis not in ("dynamic", "static"):

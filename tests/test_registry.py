@@ -205,3 +205,25 @@ def test_the_sweep_takes_its_solvers_from_the_registry(tmp_path, monkeypatch):
     assert type(make_solver("reg_solvers:Plain")).__name__ == "Plain"
     with pytest.raises(AttributeError, match="no attribute 'NOTHING'"):
         sweep.NOTHING  # noqa: B018
+
+
+def test_a_simulation_takes_its_solver_by_name():
+    import dda
+    from dda.materials import LinearElastic
+
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)],
+                    LinearElastic(young=1e9, poisson=0.2, density=1000.0))
+    for name, cls in (("legacy", LegacyPullBack), ("newton", NewtonRaphson)):
+        sim = dda.Simulation(scene, dt=0.01, solver=name)
+        assert type(sim.solver) is cls
+    # the same run as with the instance
+    by_name = dda.Simulation(scene, dt=0.01, solver="legacy").run(0.05, progress=False)
+    by_instance = dda.Simulation(scene, dt=0.01, solver=LegacyPullBack()).run(
+        0.05, progress=False)
+    assert (by_name.displacement(0) == by_instance.displacement(0)).all()
+    with pytest.raises(registry.RegistryError,
+                       match="Simulation: unknown solver 'newtn'; use one of legacy, newton"):
+        dda.Simulation(scene, dt=0.01, solver="newtn")
+    with pytest.raises(TypeError, match="solver must be a NonlinearSolver, got 3"):
+        dda.Simulation(scene, dt=0.01, solver=3)
