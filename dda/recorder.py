@@ -14,6 +14,7 @@ from dda import geometry
 from dda.contact.contacts import OPEN
 from dda.contact.kinematics import contact_geometry
 from dda.kernels.forces import pair_force_sums
+from dda.kernels.open_close import as_float64
 from dda.result import Frame
 
 __all__ = ["Recorder", "frame", "pair_forces"]
@@ -59,16 +60,10 @@ def pair_forces(model, state):
     """Per block pair with closed contacts: its :func:`dda.contact.contacts.pair_key`, the
     total force on the higher-index block, and the normal weighted by the normal forces."""
     c = state.contacts
-    closed = (c.state != OPEN).nonzero()[0]
-    if len(closed) == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros((0, 2)), np.zeros((0, 2))
     # the contacted edges' frames as contact_geometry has them (P2 = next(e), P3 = e),
-    # summed per pair in compiled code (dda.kernels.forces)
-    return pair_force_sums(np.ascontiguousarray(state.x, dtype=np.float64), model.topo.nxt,
-                           c.edge[closed], c.bj[closed], c.bk[closed],
-                           np.ascontiguousarray(c.t_n[closed], dtype=np.float64),
-                           np.ascontiguousarray(c.t_s[closed], dtype=np.float64),
-                           model.n_blocks)
+    # summed per pair in compiled code (dda.kernels.forces), which picks the closed contacts
+    return pair_force_sums(as_float64(state.x), model.topo.nxt, c.state, c.edge, c.bj, c.bk,
+                           as_float64(c.t_n), as_float64(c.t_s), model.n_blocks)
 
 
 class Recorder:

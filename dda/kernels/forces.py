@@ -16,20 +16,28 @@ __all__ = ["pair_force_sums"]
 
 
 @njit(cache=True)
-def pair_force_sums(x, nxt, edge, bj, bk, t_n, t_s, n_blocks):
-    """Per block pair (``min n_blocks + max``, sorted) of the given closed contacts: the key,
-    the total force on the higher-numbered block and the normal weighted by ``|t_n|``.
+def pair_force_sums(x, nxt, state, edge, bj, bk, t_n, t_s, n_blocks):
+    """Per block pair (``min n_blocks + max``, sorted) of the closed contacts (``state``
+    not 0, in their order): the key, the total force on the higher-numbered block and the
+    normal weighted by ``|t_n|``.
 
     Each contact's edge frame is the one :func:`dda.contact.kinematics.contact_geometry` has
     (tangent from ``nxt[edge]`` to ``edge``, normal its left normal); the force on block j is
     ``-(t_n n + t_s tau)``.
     """
-    m = edge.shape[0]
+    m = 0
+    for i in range(state.shape[0]):
+        if state[i] != 0:
+            m += 1
     key = np.empty(m, dtype=np.int64)
     force = np.empty((m, 2))
     normal = np.empty((m, 2))
-    for c in range(m):
-        e = edge[c]
+    c = -1
+    for i in range(state.shape[0]):
+        if state[i] == 0:
+            continue
+        c += 1
+        e = edge[i]
         d0 = x[e, 0] - x[nxt[e], 0]
         d1 = x[e, 1] - x[nxt[e], 1]
         ln = np.hypot(d0, d1)
@@ -37,12 +45,12 @@ def pair_force_sums(x, nxt, edge, bj, bk, t_n, t_s, n_blocks):
         t1 = d1 / ln
         g0 = -t1
         g1 = t0
-        sign = 1.0 if bj[c] > bk[c] else -1.0
-        force[c, 0] = sign * -(t_n[c] * g0 + t_s[c] * t0)
-        force[c, 1] = sign * -(t_n[c] * g1 + t_s[c] * t1)
-        normal[c, 0] = sign * g0 * abs(t_n[c])
-        normal[c, 1] = sign * g1 * abs(t_n[c])
-        key[c] = min(bj[c], bk[c]) * n_blocks + max(bj[c], bk[c])
+        sign = 1.0 if bj[i] > bk[i] else -1.0
+        force[c, 0] = sign * -(t_n[i] * g0 + t_s[i] * t0)
+        force[c, 1] = sign * -(t_n[i] * g1 + t_s[i] * t1)
+        normal[c, 0] = sign * g0 * abs(t_n[i])
+        normal[c, 1] = sign * g1 * abs(t_n[i])
+        key[c] = min(bj[i], bk[i]) * n_blocks + max(bj[i], bk[i])
     order = np.argsort(key, kind="mergesort")
     n_keys = 0
     for j in range(m):
