@@ -333,58 +333,16 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
     It takes a dynamic step of a scene of plain blocks with one built-in law, a dense system,
     contacts in the committed state, and the solver's own one-call dense step
     (:class:`dda.solvers.LegacyPullBack`, :class:`dda.solvers.NewtonRaphson`)."""
+    arguments = contact_step_arguments(model, state, dt, solver, settings, d0, ints, k_eff,
+                                       f_eff, v_eff, known)
+    if arguments is None:
+        return None
+    args, pattern, sliding = arguments
     c = state.contacts
-    m = len(c)
-    kind = type(solver)
-    newton = kind is newton_module.NewtonRaphson
-    # it stands for the solvers' own solve_step and this module's detection: a solver
-    # whose solve_step is wrapped, or a detection function swapped, takes the composed path
-    if not (m and COMPILED_ELEMENT and oc.DENSE_PASSES and oc.PASS_LOG is None
-            and element_module.KERNEL_LAWS and "solve_step" not in solver.__dict__
-            and narrow_phase is _NARROW_PHASE and keep_closed is _KEEP_CLOSED
-            and (newton and newton_module.DENSE_NEWTON and newton_module.NEWTON_DENSE_STEP
-                 and kind.solve_step is _NEWTON_SOLVE_STEP
-                 or kind is legacy_module.LegacyPullBack and legacy_module.LEGACY_DENSE_STEP
-                 and kind.solve_step is _LEGACY_SOLVE_STEP)):
-        return None
-    constants = _small_step_constants(model)
-    if constants is None:
-        return None
-    law, initial, zeta, zeta_s, rigid, faces = constants
-    history = c.history
-    sliding = history.get("sliding")
-    if (len(history) != 2 + (sliding is not None) or "g_se" not in history
-            or "slip" not in history or (sliding is None and law[0] != 0)):
-        return None
-    factors = _factors(solver)
-    args = (model.free, c.bj, c.bk, model.rigid)
-    pattern = (SystemPattern(*args) if factors is None else factors.kept(
-        "pattern", args, lambda: SystemPattern(*args, cache=factors)))
-    if pattern.n > DENSE_LIMIT or pattern.unknowns == 0:
-        return None
-    joints = model.joints
+    newton = args[0]
     with section("solve"):
         (status, counts, numbers_out, d, norms, trial_state, rows, x_new, velocity, stress,
-         rotation, centroid) = contact_step(
-            newton, state.x, model.offsets, model.topo.nxt, model.topo.prv, model.topo.block,
-            model.free, model.thickness, model.size, model.density, model.elasticity,
-            state.stress, state.rotation, ints.centroid, ints.area, ints.sxx, ints.syy, v_eff,
-            float(dt), float(d0), float(state.penetration), model.min_size,
-            float(settings.penetration_tolerance), model.min_thickness,
-            float(settings.max_displacement_ratio), joints.pair_keys, joints.pair_joint,
-            joints.default, joints.normal_penalty, joints.shear_penalty, zeta, zeta_s,
-            c.vertex, c.edge, c.bj, c.bk, c.state, c.xi0, c.t_n, c.t_s, history["g_se"],
-            history["slip"], np.zeros(m) if sliding is None else sliding, law, initial,
-            k_eff, f_eff, known[2], *dense_layout(pattern), SPRING_TERMS, oc.GAP_ROUND_OFF,
-            oc._COORDINATE_ROUND_OFF, settings.max_open_close, float(oc.SETTLE_BAND),
-            (*pass_rules(), oc.RETRY_PATIENCE, oc.LAG_SECANT_FROM),
-            bool(getattr(solver, "unsettled_predictor", False)),
-            int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
-            float(newton_module.PREDICTOR_CONTRACTION), float(getattr(solver, "tol", 1.0)),
-            newton_module.ROUND_OFF,
-            newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH,
-            bool(newton_module.REVERSED_STICK), rigid, faces,
-            _FACE_COS, bool(newton_module.NOISE_FLOOR))
+         rotation, centroid) = contact_step(*args)
     if status == FALLBACK:
         return None
     xi0, t_n, t_s, g_se, slip, sliding_out = rows[:6]
@@ -398,7 +356,7 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
                                                   oc_passes, passes, iterations, d, norms,
                                                   scale), *costs)
     history = {"g_se": g_se, "slip": slip}
-    if sliding is not None:
+    if sliding:
         history["sliding"] = sliding_out
     sol = StepSolution(d, ContactSet(c.vertex, c.edge, c.bj, c.bk, trial_state, xi0, t_n, t_s,
                                      history), True, passes,
@@ -435,6 +393,64 @@ def _small_failure(newton, solver, solver_status, oc_status, oc_passes, passes, 
         sol.reason = (f"{oc.dense_failure(oc_status, oc_passes)}, and from its last pass "
                       f"{sol.reason}")
     return sol
+
+
+def contact_step_arguments(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_eff,
+                           known):
+    """The arguments of :func:`dda.kernels.small_step.contact_step` for a step of ``dt`` from
+    ``state`` (with :func:`step`'s start: ``d0``, the blocks' integrals and effective system,
+    the carried velocity and the known motion), the scene's
+    :class:`dda.solvers.linear.SystemPattern` and whether the law keeps a ``sliding``
+    history; None when it is not a step :func:`_small_step` takes."""
+    c = state.contacts
+    m = len(c)
+    kind = type(solver)
+    newton = kind is newton_module.NewtonRaphson
+    # it stands for the solvers' own solve_step and this module's detection: a solver
+    # whose solve_step is wrapped, or a detection function swapped, takes the composed path
+    if not (m and COMPILED_ELEMENT and oc.DENSE_PASSES and oc.PASS_LOG is None
+            and element_module.KERNEL_LAWS and "solve_step" not in solver.__dict__
+            and narrow_phase is _NARROW_PHASE and keep_closed is _KEEP_CLOSED
+            and (newton and newton_module.DENSE_NEWTON and newton_module.NEWTON_DENSE_STEP
+                 and kind.solve_step is _NEWTON_SOLVE_STEP
+                 or kind is legacy_module.LegacyPullBack and legacy_module.LEGACY_DENSE_STEP
+                 and kind.solve_step is _LEGACY_SOLVE_STEP)):
+        return None
+    constants = _small_step_constants(model)
+    if constants is None:
+        return None
+    law, initial, zeta, zeta_s, rigid, faces = constants
+    history = c.history
+    sliding = history.get("sliding")
+    if (len(history) != 2 + (sliding is not None) or "g_se" not in history
+            or "slip" not in history or (sliding is None and law[0] != 0)):
+        return None
+    factors = _factors(solver)
+    args = (model.free, c.bj, c.bk, model.rigid)
+    pattern = (SystemPattern(*args) if factors is None else factors.kept(
+        "pattern", args, lambda: SystemPattern(*args, cache=factors)))
+    if pattern.n > DENSE_LIMIT or pattern.unknowns == 0:
+        return None
+    joints = model.joints
+    return (newton, state.x, model.offsets, model.topo.nxt, model.topo.prv, model.topo.block,
+            model.free, model.thickness, model.size, model.density, model.elasticity,
+            state.stress, state.rotation, ints.centroid, ints.area, ints.sxx, ints.syy, v_eff,
+            float(dt), float(d0), float(state.penetration), model.min_size,
+            float(settings.penetration_tolerance), model.min_thickness,
+            float(settings.max_displacement_ratio), joints.pair_keys, joints.pair_joint,
+            joints.default, joints.normal_penalty, joints.shear_penalty, zeta, zeta_s,
+            c.vertex, c.edge, c.bj, c.bk, c.state, c.xi0, c.t_n, c.t_s, history["g_se"],
+            history["slip"], np.zeros(m) if sliding is None else sliding, law, initial,
+            k_eff, f_eff, known[2], *dense_layout(pattern), SPRING_TERMS, oc.GAP_ROUND_OFF,
+            oc._COORDINATE_ROUND_OFF, settings.max_open_close, float(oc.SETTLE_BAND),
+            (*pass_rules(), oc.RETRY_PATIENCE, oc.LAG_SECANT_FROM),
+            bool(getattr(solver, "unsettled_predictor", False)),
+            int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
+            float(newton_module.PREDICTOR_CONTRACTION), float(getattr(solver, "tol", 1.0)),
+            newton_module.ROUND_OFF,
+            newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH,
+            bool(newton_module.REVERSED_STICK), rigid, faces,
+            _FACE_COS, bool(newton_module.NOISE_FLOOR)), pattern, sliding is not None
 
 
 def _small_step_constants(model):
