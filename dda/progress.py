@@ -41,10 +41,12 @@ class ProgressBar:
                         bar_format="{desc} {n:.4f}/{total:.4f} s |{bar}| {percentage:3.0f}% "
                                    "[{elapsed}<{remaining}{postfix}]")
 
-    def __call__(self, state, report=None):
+    def __call__(self, state, report=None, steps: int = 1):
+        """After ``steps`` committed steps (one, or a batch of :mod:`dda.compiled_run`;
+        ``report.open_close_passes`` their passes)."""
         dt = state.time - self.last_time
         self.last_time = state.time
-        self.steps += 1
+        self.steps += steps
         if self.note:
             now = time.perf_counter()
             if now - self.last_call < NOTE_UNTIL:

@@ -1,0 +1,183 @@
+"""Runs of small steps in one kernel call (:mod:`dda.kernels.run_steps`), for
+:meth:`dda.Simulation.run`.
+
+A 2-block step of ``benchmarks/small_step.py`` costs some 30 us in its kernels and 150 us of
+Python around them. Where nothing in a run needs Python between two steps, a
+:class:`StepRuns` hands a batch of steps to :func:`dda.kernels.run_steps.run_steps` and writes
+back what the steps would have written one by one: the committed state, the stats rows, the
+recorded steps and the step control's counts. The steps are the same to the bit as those
+:func:`dda.step.step` takes (``tests/test_compiled_run.py``).
+
+A batch is tried when the run has no writer, checkpoint or callback (they see every step),
+the scene's blocks are plain (:attr:`dda.model.Model.plain_blocks`) with no known motion, no
+bolts, a dynamic analysis, the step control at its full dt with no search hint, and the step
+one :func:`dda.step.step` takes in one kernel call
+(:func:`dda.step.contact_step_arguments`). A batch stops before a step that needs anything
+else (a refused step, a slip reversal to locate, the run's last step) and the run takes that
+step the usual way; after a batch that took no step, the next try waits 1, 2, 4 ... 64 steps.
+
+In the stats a batch's steps share its wall time evenly, all of it under ``solve_time``.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import replace
+from types import SimpleNamespace
+
+import numpy as np
+
+from dda import slip_events
+from dda import step as step_module
+from dda.contact.contacts import ContactSet
+from dda.kernels.run_steps import ROW_FIELDS, STEPS_DONE, run_steps
+from dda.penalty_advice import SOFT_DEPTH, STIFF_CUTS
+from dda.profiling import SECTIONS
+
+__all__ = ["COMPILED_RUN", "StepRuns"]
+
+#: take runs of small steps in one kernel call (False: every step through dda.step.step)
+COMPILED_RUN = True
+
+#: the steps of the first batch, and the most of one (a batch is doubled while it takes
+#: under ``BATCH_SECONDS``: Ctrl-C and the progress bar wait for the end of a batch)
+FIRST_BATCH, MOST_BATCH, BATCH_SECONDS = 64, 2048, 0.05
+#: the longest wait (Python steps) before a batch is tried again after one that took none
+MOST_WAIT = 64
+
+_SOLVE = SECTIONS.index("solve")
+_ROW = {name: i for i, name in enumerate(ROW_FIELDS)}
+
+
+class StepRuns:
+    """The batches of one :meth:`dda.Simulation.run` (module docstring).
+
+    Parameters
+    ----------
+    sim : dda.Simulation
+    result : the run's :class:`dda.result.Result`
+    recorder : the run's :class:`dda.recorder.Recorder`
+    """
+
+    def __init__(self, sim, result, recorder):
+        self.sim, self.result, self.recorder = sim, result, recorder
+        self.size = FIRST_BATCH
+        self.wait = 0  # Python steps before the next try
+        self.misses = 0  # batches in a row that took no step
+
+    @staticmethod
+    def possible(sim, writer, checkpoint, callback) -> bool:
+        """Whether a run of ``sim`` with these may take batches at all."""
+        model = sim.model
+        return (COMPILED_RUN and writer is None and checkpoint is None and callback is None
+                and step_module.BLOCK_KERNELS and step_module.SMALL_STEP
+                and model.plain_blocks and not model.moves_known and model.bolts is None
+                and sim.velocity_carry > 0.0 and model.n_blocks > 1)
+
+    def advance(self, t_end: float, bar=None) -> int:
+        """Take a batch of steps towards ``t_end`` if it may: the steps taken (0: the run
+        takes its next step the usual way)."""
+        if self.wait > 0:
+            self.wait -= 1
+            return 0
+        steps, why = self._batch(t_end, bar)
+        if steps == 0:
+            self.misses += 1
+            self.wait = min(MOST_WAIT, 2 ** (self.misses - 1))
+        else:
+            self.misses = 0
+            if why != STEPS_DONE:  # the next step is the run's to take
+                self.wait = 1
+        return steps
+
+    def _batch(self, t_end, bar):
+        sim = self.sim
+        model, control, advisor = sim.model, sim.control, sim.advisor
+        dt = control.dt
+        if not (control.dt_now == dt and not control.probing and control.search_hint == 0.0
+                and ("stiff" in advisor.warned or control.contact_cuts < STIFF_CUTS)):
+            return 0, STEPS_DONE
+        state = sim.committed
+        settings = sim.settings
+        carry = settings.velocity_carry
+        # the first step's arguments as dda.step.step makes them (the kernel makes each
+        # step's own again)
+        ints, k_eff, f_eff, v_eff, speed = step_module._plain_start(model, state, dt, carry)
+        known = (state.known_u, None, np.zeros((model.n_blocks, 6)), state.shaking)
+        d0 = step_module.search_distance(model, state, dt, carry, ints.centroid,
+                                         step_module._NO_MOVES, 0.0, speed)
+        arguments = step_module.contact_step_arguments(model, state, dt, sim.solver, settings,
+                                                       d0, ints, k_eff, f_eff, v_eff, known)
+        if arguments is None:
+            return 0, STEPS_DONE
+        args, pattern, has_sliding = arguments
+        gravity = float(model.gravity or 0.0)
+        free = model.free
+        start = _time.perf_counter()
+        (steps, why, t, x, velocity, stress, rotation, centroid, c_state, rows, last_move,
+         untracked, penetration, wait, since, stats, norms, n_norms, records, rec_time,
+         rec_disp, rec_rot, rec_vel, rec_stress, pair_at, pair_keys, pair_force,
+         pair_normal) = run_steps(
+            self.size, t_end - 1e-12 * max(1.0, t_end), float(t_end), state.velocity,
+            state.centroid, float(state.last_move), float(state.untracked), float(state.time),
+            gravity, float(carry), 2.0 / dt**2, 2.0 / dt, 0.5 * abs(gravity) * dt * dt,
+            1e-6 * model.min_size, float(step_module.SEARCH_FACTOR),
+            bool(sim.locate_reversals and sim.velocity_carry > 0.0), int(control.reversal_wait),
+            float(slip_events.MIN_FRACTION), float(slip_events.NORMAL_RATIO),
+            np.where(free, carry, 1.0), "soft" not in advisor.warned,
+            SOFT_DEPTH * model.min_thickness * float(model.joints.normal_penalty.min()),
+            int(self.recorder.every), int(self.recorder.since), model.centroid_initial,
+            model.rigid is not None, bool(has_sliding), int(getattr(sim.solver, "max_iter", 1))
+            + 8, *args)
+        wall = _time.perf_counter() - start
+        if steps == 0:
+            return 0, why
+        self.size = (min(MOST_BATCH, 2 * self.size) if wall < BATCH_SECONDS
+                     else max(FIRST_BATCH, self.size // 2))
+        c = state.contacts
+        history = {"g_se": rows[3], "slip": rows[4]}
+        if has_sliding:
+            history["sliding"] = rows[5]
+        sim.committed = replace(
+            state, time=float(t), x=x, velocity=velocity, stress=stress, rotation=rotation,
+            centroid=centroid, contacts=ContactSet(c.vertex, c.edge, c.bj, c.bk, c_state,
+                                                   rows[0], rows[1], rows[2], history),
+            last_move=float(last_move), untracked=float(untracked),
+            penetration=float(penetration))
+        self._stats(stats, norms, n_norms, steps, dt, wall, pattern.unknowns, args[0])
+        self._records(records, rec_time, rec_disp, rec_rot, rec_vel, rec_stress, pair_at,
+                      pair_keys, pair_force, pair_normal)
+        self.recorder.since = int(since)
+        control.steps += steps
+        control.good_steps += steps
+        control.tried_untracked = -1.0
+        control.reversal_wait = int(wait)
+        # (a no-op but where the last step failed the quick test for soft springs)
+        advisor.observe(sim.committed, control.steps, control.contact_cuts)
+        if bar is not None:
+            bar(sim.committed, SimpleNamespace(
+                open_close_passes=int(stats[:, _ROW["open_close_passes"]].sum())), steps=steps)
+        return steps, why
+
+    def _stats(self, stats, norms, n_norms, steps, dt, wall, unknowns, newton):
+        """The batch's rows in :class:`dda.result.StepStats` (Simulation._advance's)."""
+        share = wall / steps
+        sections = [0.0] * len(SECTIONS)
+        sections[_SOLVE] = share
+        append = self.result.stats.append_row
+        for i, row in enumerate(stats.tolist()):
+            (t, iterations, passes, contacts, closed, sliding, solves, pairs, pen,
+             spring) = row
+            append((t, dt, int(iterations), int(passes), int(contacts), int(closed),
+                    int(sliding), 0, share, int(solves), unknowns, int(pairs), pen, spring,
+                    *sections),
+                   norms[i, :n_norms[i]].tolist() if newton else [])
+
+    def _records(self, records, rec_time, rec_disp, rec_rot, rec_vel, rec_stress, pair_at,
+                 pair_keys, pair_force, pair_normal):
+        """The batch's recorded steps in the run's :class:`dda.result.Result`."""
+        record = self.result.record
+        for r in range(len(records)):
+            a, b = pair_at[r], pair_at[r + 1]
+            record(rec_time[r], rec_disp[r], rec_rot[r], rec_vel[r], rec_stress[r],
+                   pair_keys[a:b].copy(), pair_force[a:b].copy(), pair_normal[a:b].copy())
