@@ -21,6 +21,7 @@ In the stats a batch's steps share its wall time evenly, all of it under ``solve
 
 from __future__ import annotations
 
+import sys
 import time as _time
 from dataclasses import replace
 from types import SimpleNamespace
@@ -31,6 +32,7 @@ from dda import slip_events
 from dda import step as step_module
 from dda.contact.contacts import ContactSet
 from dda.kernels.run_steps import ROW_FIELDS, STEPS_DONE, run_steps
+from dda.kernels.small_step import contact_step
 from dda.penalty_advice import SOFT_DEPTH, STIFF_CUTS
 from dda.profiling import SECTIONS
 
@@ -46,6 +48,7 @@ FIRST_BATCH, MOST_BATCH, BATCH_SECONDS = 64, 2048, 0.05
 MOST_WAIT = 64
 
 _SOLVE = SECTIONS.index("solve")
+_STEP = step_module.step
 _ROW = {name: i for i, name in enumerate(ROW_FIELDS)}
 
 
@@ -69,9 +72,13 @@ class StepRuns:
     def possible(sim, writer, checkpoint, callback) -> bool:
         """Whether a run of ``sim`` with these may take batches at all."""
         model = sim.model
+        # (a batch stands for dda.step.step and its one kernel call: a run whose step or
+        # kernel is wrapped, to watch or change each step, takes every step that way)
+        simulation = sys.modules["dda.simulation"]
         return (COMPILED_RUN and writer is None and checkpoint is None and callback is None
+                and simulation.step is _STEP and step_module.contact_step is contact_step
                 and step_module.BLOCK_KERNELS and step_module.SMALL_STEP
-                and model.plain_blocks and not model.moves_known and model.bolts is None
+                and model.plain_blocks and model.bolts is None
                 and sim.velocity_carry > 0.0 and model.n_blocks > 1)
 
     def advance(self, t_end: float, bar=None) -> int:
@@ -114,11 +121,17 @@ class StepRuns:
         gravity = float(model.gravity or 0.0)
         free = model.free
         start = _time.perf_counter()
+        size, motions = self.size, None
+        if model.moves_known:
+            motions = _known_motions(model, state, dt, t_end, size)
+            size = len(motions[0])
+            if size == 0:
+                return 0, STEPS_DONE
         (steps, why, t, x, velocity, stress, rotation, centroid, c_state, rows, last_move,
          untracked, penetration, wait, since, stats, norms, n_norms, records, rec_time,
          rec_disp, rec_rot, rec_vel, rec_stress, pair_at, pair_keys, pair_force,
          pair_normal) = run_steps(
-            self.size, t_end - 1e-12 * max(1.0, t_end), float(t_end), state.velocity,
+            size, t_end - 1e-12 * max(1.0, t_end), float(t_end), state.velocity,
             state.centroid, float(state.last_move), float(state.untracked), float(state.time),
             gravity, float(carry), 2.0 / dt**2, 2.0 / dt, 0.5 * abs(gravity) * dt * dt,
             1e-6 * model.min_size, float(step_module.SEARCH_FACTOR),
@@ -128,7 +141,8 @@ class StepRuns:
             SOFT_DEPTH * model.min_thickness * float(model.joints.normal_penalty.min()),
             int(self.recorder.every), int(self.recorder.since), model.centroid_initial,
             model.rigid is not None, bool(has_sliding), int(getattr(sim.solver, "max_iter", 1))
-            + 8, *args)
+            + 8, motions is not None, *(_NO_MOTION if motions is None else motions[1:4]),
+            _full_blocks(model), *args)
         wall = _time.perf_counter() - start
         if steps == 0:
             return 0, why
@@ -138,8 +152,10 @@ class StepRuns:
         history = {"g_se": rows[3], "slip": rows[4]}
         if has_sliding:
             history["sliding"] = rows[5]
+        moved = {} if motions is None else {"known_u": motions[0][steps - 1],
+                                             "shaking": motions[4][steps - 1]}
         sim.committed = replace(
-            state, time=float(t), x=x, velocity=velocity, stress=stress, rotation=rotation,
+            state, **moved, time=float(t), x=x, velocity=velocity, stress=stress, rotation=rotation,
             centroid=centroid, contacts=ContactSet(c.vertex, c.edge, c.bj, c.bk, c_state,
                                                    rows[0], rows[1], rows[2], history),
             last_move=float(last_move), untracked=float(untracked),
@@ -181,3 +197,46 @@ class StepRuns:
             a, b = pair_at[r], pair_at[r + 1]
             record(rec_time[r], rec_disp[r], rec_rot[r], rec_vel[r], rec_stress[r],
                    pair_keys[a:b].copy(), pair_force[a:b].copy(), pair_normal[a:b].copy())
+
+
+_NO_MOTION = (np.zeros((1, 1, 6)), np.zeros((1, 1, 2)), np.zeros(1))
+
+
+def _full_blocks(model) -> np.ndarray:
+    """The blocks moved in full (:attr:`dda.model.Model.full_motions`), in their order."""
+    kept = model.__dict__.get("_full_blocks")
+    if kept is None:
+        kept = model.__dict__["_full_blocks"] = np.array(
+            [m.block for m in model.full_motions], dtype=np.int64)
+    return kept
+
+
+def _known_motions(model, state, dt, t_end, size):
+    """The known motion of each step a batch may take from ``state`` (at most ``size``,
+    none past the run's last): ``(known_u, d_known, known_v, largest known move, shaking)``
+    per step, as :func:`dda.step.step` works them out (:meth:`dda.model.Model.
+    known_motion`)."""
+    guard = t_end - 1e-12 * max(1.0, t_end)
+    free = model.free
+    us, ds, vs, most, shakings = [], [], [], [], []
+    t, known_u, shaking = state.time, state.known_u, state.shaking
+    for _ in range(size):
+        remaining = t_end - t
+        if not (dt <= remaining and not remaining - dt < 1e-6 * dt and t + dt < guard):
+            break
+        t = t + dt
+        u, v, shaking = model.known_motion(t, known_u, shaking)
+        d_known = np.zeros((model.n_blocks, 6))
+        d_known[:, :2] = u - known_u
+        d_known[free] = 0.0
+        known_du = d_known[~free, :2]
+        most.append(float(np.hypot(known_du[:, 0], known_du[:, 1]).max()) if len(known_du)
+                    else 0.0)
+        us.append(u)
+        ds.append(d_known)
+        vs.append(v)
+        shakings.append(shaking)
+        known_u = u
+    if not us:
+        return [], None, None, None, []
+    return us, np.array(ds), np.array(vs), np.array(most), shakings

@@ -10,7 +10,7 @@ import pytest
 
 import dda
 import dda.compiled_run as compiled_run
-from dda.contact import CoulombSingle, StaticDynamicTransition
+from dda.contact import BartonBandis, CoulombSingle, StaticDynamicTransition
 from dda.penalty_advice import PenaltyWarning
 from dda.progress import ProgressBar
 from dda.solvers import LegacyPullBack, NewtonRaphson
@@ -31,6 +31,18 @@ def _stability(name):
     return made[0], 1e-3, made[1]  # the impacts: (scene, duration) at dt 1e-3
 
 
+def _moving_base():  # a block on a shaken table (a callable acceleration, integrated)
+    from dda.studies.cases import moving_base
+
+    return moving_base()[0], 1e-3, 0.5
+
+
+def _dragged():  # a block on a base moved in full by a displacement history
+    scene = stack_scene(1)
+    scene.prescribe_motion(0, lambda t: (0.02 * np.sin(2 * np.pi * 3.0 * t), 0.0))
+    return scene, 1e-3, 0.4
+
+
 CASES = {
     "coulomb incline": lambda: _incline(CoulombSingle(phi=30.0)),
     # kicked uphill: it stops and turns (a slip reversal located)
@@ -42,6 +54,8 @@ CASES = {
     "block on block": lambda: _stability("block_on_block"),
     "ell on a step": lambda: _stability("ell_on_a_step"),
     "lip": lambda: _stability("lip"),
+    "moving base": _moving_base,
+    "dragged by its base": _dragged,
 }
 
 
@@ -150,8 +164,8 @@ def test_the_soft_spring_warning_comes_at_the_same_step(monkeypatch):
 
 
 def test_no_batch_where_the_run_needs_every_step(monkeypatch, tmp_path):
-    """A callback, a writer or a checkpoint sees every step; a shaken scene, a static one or
-    a law without a kernel takes no batch."""
+    """A callback, a writer or a checkpoint sees every step; a static analysis, or a scene
+    whose steps are not taken in one kernel call (a law without a kernel), takes no batch."""
     make = CASES["coulomb incline"]
     calls = []
     _, result, batched = _run(make, "legacy", True, monkeypatch,
@@ -162,8 +176,8 @@ def test_no_batch_where_the_run_needs_every_step(monkeypatch, tmp_path):
     assert batched == 0
     _, _, batched = _run(make, "legacy", True, monkeypatch, analysis="static")
     assert batched == 0
-    shaken = scenes.shaken_cut_slope()
-    _, _, batched = _run(lambda: (shaken[0], shaken[1], 0.02), "legacy", True, monkeypatch)
+    _, _, batched = _run(lambda: _incline(BartonBandis(jrc=10.0, jcs=50e6, phi_r=28.0)),
+                         "legacy", True, monkeypatch)
     assert batched == 0
 
 
@@ -198,3 +212,27 @@ def test_a_failed_batch_waits_longer_each_time(monkeypatch):
     assert list(gaps[:7]) == [2, 3, 5, 9, 17, 33, 65]
     assert len(tries) < 20
 
+
+
+def test_ctrl_c_stops_the_run_at_the_end_of_a_batch(monkeypatch):
+    """A signal that comes while a batch runs in compiled code stops the run after it, the
+    committed state whole (its time the sum of its steps) and the handler given back."""
+    import os
+    import signal
+    import threading
+    import time
+
+    scene = scenes.incline(CoulombSingle(phi=30.0))[0]
+    sim = dda.Simulation(scene, dt=1e-4, solver=LegacyPullBack())
+    sim.run(0.01, progress=False)  # (the kernels compiled)
+    before = signal.getsignal(signal.SIGINT)
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        sim.run(60.0, progress=False)
+    assert time.perf_counter() - start < 5.0
+    steps = sim.control.steps
+    assert 1000 < steps < 600_000
+    assert sim.committed.time == pytest.approx(steps * 1e-4, rel=1e-9)
+    assert signal.getsignal(signal.SIGINT) is before

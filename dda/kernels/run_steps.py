@@ -52,7 +52,8 @@ ROW_FIELDS = ("time", "iterations", "open_close_passes", "contacts", "closed", "
 def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untracked, time,
               gravity, carry, k_factor, v_factor, fall, floor, search_factor, locate, wait,
               least, normal_ratio, start_scale, soft_check, soft_threshold, every, since,
-              centroid0, has_rigid, has_sliding, max_norms,
+              centroid0, has_rigid, has_sliding, max_norms, has_known, d_knowns, known_vs,
+              known_max, full_blocks,
               newton, x, offsets, nxt, prv, block, free, thickness, size, density,
               elasticity, stress, rotation, centroid, area, sxx, syy, v_eff, dt, d0,
               penetration, min_size, tolerance, min_thickness, max_ratio, pair_keys,
@@ -88,6 +89,11 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
         the blocks' initial centroids
     has_rigid, has_sliding, max_norms : rigid blocks in the scene; the law keeps a
         ``sliding`` history; the most residual norms a step may hand back
+    has_known, d_knowns, known_vs, known_max, full_blocks : blocks whose motion is given
+        (shaken or moved): each step's known increments (its ``d_known``), known velocities
+        and largest known move (:meth:`dda.model.Model.known_motion`, worked out by the caller
+        for the steps it asks for), and the blocks moved in full (their velocity is their
+        move over dt)
 
     Returns
     -------
@@ -148,6 +154,10 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
                                 block, cur_v, carry, k_factor, v_factor, True)
         predicted = speed * dt
         predicted += fall
+        step_known = d_known
+        if has_known:
+            step_known = d_knowns[steps]
+            predicted = max(predicted, known_max[steps])
         d0_ = search_factor * max(predicted, last_move, 0.0) + floor
         sliding_in = rows[5].copy() if has_sliding else no_sliding
         (status, counts, numbers, _, step_norms, new_state, new_rows, x_new, v_new, s_new,
@@ -157,7 +167,7 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
             cur_pen, min_size, tolerance, min_thickness, max_ratio, pair_keys, pair_joint,
             default, pn_table, ps_table, zeta_table, zeta_s_table, c_vertex, c_edge, c_bj,
             c_bk, cur_state, rows[0].copy(), rows[1].copy(), rows[2].copy(), rows[3].copy(),
-            rows[4].copy(), sliding_in, law, init, k_eff, f_eff, d_known, n, block_base,
+            rows[4].copy(), sliding_in, law, init, k_eff, f_eff, step_known, n, block_base,
             block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
             reduced, terms, gap_rel, gap_abs, max_passes, band, rules, unsettled, max_iter,
             predictor_iterations, predictor_contraction, tol, round_off, halvings,
@@ -173,6 +183,14 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
                 if rigid[b]:
                     for j in range(3, 6):
                         v_new[b, j] = 0.0
+        if has_known:  # (dda.step._advanced)
+            for b in range(nb):
+                if not free[b]:
+                    v_new[b, 0] = known_vs[steps, b, 0]
+                    v_new[b, 1] = known_vs[steps, b, 1]
+            for b in full_blocks:
+                v_new[b, 0] = step_known[b, 0] / dt
+                v_new[b, 1] = step_known[b, 1] / dt
         # ---- the reversal check (Simulation._reversal_located, slip_events.reversal_fraction)
         if locate and wait == 0:
             start = cur_v.copy()
