@@ -8,13 +8,15 @@ back what the steps would have written one by one: the committed state, the stat
 recorded steps and the step control's counts. The steps are the same to the bit as those
 :func:`dda.step.step` takes (``tests/test_compiled_run.py``).
 
-A batch is tried when the run has no writer, checkpoint or callback (they see every step),
-the scene's blocks are plain (:attr:`dda.model.Model.plain_blocks`) with no known motion, no
-bolts, a dynamic analysis, the step control at its full dt with no search hint, and the step
-one :func:`dda.step.step` takes in one kernel call
-(:func:`dda.step.contact_step_arguments`). A batch stops before a step that needs anything
-else (a refused step, a slip reversal to locate, the run's last step) and the run takes that
-step the usual way; after a batch that took no step, the next try waits 1, 2, 4 ... 64 steps.
+A batch is tried when the run has no checkpoint or callback (they see every step) and no
+writer but a :class:`dda.io.VTUWriter` that thins its series (a batch stops at each step whose
+frame it writes), the scene's blocks are plain (:attr:`dda.model.Model.plain_blocks`; a known
+motion is worked out for the batch's steps first), no bolts, a dynamic analysis, the step
+control at its full dt with no search hint, and the step one :func:`dda.step.step` takes in
+one kernel call (:func:`dda.step.contact_step_arguments`). A batch stops before a step that
+needs anything else (a refused step, a slip reversal to locate, the run's last step) and the
+run takes that step the usual way; after a batch that took no step, the next try waits 1, 2,
+4 ... 64 steps.
 
 In the stats a batch's steps share its wall time evenly, all of it under ``solve_time``.
 """
@@ -31,10 +33,12 @@ import numpy as np
 from dda import slip_events
 from dda import step as step_module
 from dda.contact.contacts import ContactSet
-from dda.kernels.run_steps import ROW_FIELDS, STEPS_DONE, run_steps
+from dda.io.vtu import VTUWriter
+from dda.kernels.run_steps import FRAME, ROW_FIELDS, STEPS_DONE, run_steps
 from dda.kernels.small_step import contact_step
 from dda.penalty_advice import SOFT_DEPTH, STIFF_CUTS
 from dda.profiling import SECTIONS
+from dda.recorder import frame
 
 __all__ = ["COMPILED_RUN", "StepRuns"]
 
@@ -75,7 +79,10 @@ class StepRuns:
         # (a batch stands for dda.step.step and its one kernel call: a run whose step or
         # kernel is wrapped, to watch or change each step, takes every step that way)
         simulation = sys.modules["dda.simulation"]
-        return (COMPILED_RUN and writer is None and checkpoint is None and callback is None
+        # (a series of every step: a frame, in Python, after each step)
+        thinned = writer is None or type(writer) is VTUWriter and (
+            writer.every > 1 or writer.interval is not None or sim.record_every > 1)
+        return (COMPILED_RUN and thinned and checkpoint is None and callback is None
                 and simulation.step is _STEP and step_module.contact_step is contact_step
                 and step_module.BLOCK_KERNELS and step_module.SMALL_STEP
                 and model.plain_blocks and model.bolts is None
@@ -105,6 +112,9 @@ class StepRuns:
                 and ("stiff" in advisor.warned or control.contact_cuts < STIFF_CUTS)):
             return 0, STEPS_DONE
         state = sim.committed
+        writing = self._writer_arguments(state)
+        if writing is None:
+            return 0, STEPS_DONE
         settings = sim.settings
         carry = settings.velocity_carry
         # the first step's arguments as dda.step.step makes them (the kernel makes each
@@ -142,7 +152,7 @@ class StepRuns:
             int(self.recorder.every), int(self.recorder.since), model.centroid_initial,
             model.rigid is not None, bool(has_sliding), int(getattr(sim.solver, "max_iter", 1))
             + 8, motions is not None, *(_NO_MOTION if motions is None else motions[1:4]),
-            _full_blocks(model), *args)
+            _full_blocks(model), *writing, *args)
         wall = _time.perf_counter() - start
         if steps == 0:
             return 0, why
@@ -164,6 +174,7 @@ class StepRuns:
         self._records(records, rec_time, rec_disp, rec_rot, rec_vel, rec_stress, pair_at,
                       pair_keys, pair_force, pair_normal)
         self.recorder.since = int(since)
+        self._frames(rec_time, why)
         control.steps += steps
         control.good_steps += steps
         control.tried_untracked = -1.0
@@ -174,6 +185,39 @@ class StepRuns:
             bar(sim.committed, SimpleNamespace(
                 open_close_passes=int(stats[:, _ROW["open_close_passes"]].sum())), steps=steps)
         return steps, why
+
+    def _writer_arguments(self, state):
+        """The kernel's ``(writer_mode, seen, writer_every, due_after)`` for the run's
+        writer, or None when a batch may not take the next step (the writer has a frame after
+        the committed state: a resumed run's)."""
+        writer = self.recorder.writer
+        if writer is None:
+            return 0, 0, 1, 0.0
+        last = writer.last_time
+        if last is None and writer is self.recorder.written[0]:
+            last = self.recorder.written[1]
+        if last is not None and not last <= state.time:
+            return None
+        if writer.interval is None:
+            return 1, int(writer._seen), int(writer.every), 0.0
+        n = writer._n
+        # (VTUWriter.due's test, the same numbers)
+        due = -np.inf if n == 0 else writer._entries[n - 1][0] + writer.interval * (1 - 1e-9)
+        return 2, 0, 1, float(due)
+
+    def _frames(self, rec_time, why):
+        """The writer's part of the batch's records (Recorder._record's): the frame of the
+        last step when it was due, the others counted as skipped."""
+        writer = self.recorder.writer
+        if writer is None:
+            return
+        n = len(rec_time)
+        for r in range(n):
+            if r == n - 1 and why == FRAME:
+                writer.write(frame(self.sim.model, self.sim.committed))
+            else:
+                writer.skip(float(rec_time[r]))
+            self.result.frames_written += 1
 
     def _stats(self, stats, norms, n_norms, steps, dt, wall, unknowns, newton):
         """The batch's rows in :class:`dda.result.StepStats` (Simulation._advance's)."""

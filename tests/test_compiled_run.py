@@ -236,3 +236,20 @@ def test_ctrl_c_stops_the_run_at_the_end_of_a_batch(monkeypatch):
     assert 1000 < steps < 600_000
     assert sim.committed.time == pytest.approx(steps * 1e-4, rel=1e-9)
     assert signal.getsignal(signal.SIGINT) is before
+
+
+@pytest.mark.parametrize("thinned", [{"every": 7}, {"interval": 0.013}, {}])
+def test_a_vtu_series_is_the_one_written_step_by_step(thinned, monkeypatch, tmp_path):
+    """With a VTU writer a batch stops at each step whose frame the writer takes: the same
+    files, byte for byte, and the same index (no batch where every step is a frame)."""
+    files = {}
+    for on in (False, True):
+        writer = dda.io.VTUWriter(tmp_path / str(on) / "case", **thinned)
+        sim, result, batched = _run(CASES["moving base"], "newton", on, monkeypatch,
+                                    output=writer)
+        paths = sorted(writer.files)
+        files[on] = ([p.name for p in paths], [p.read_bytes() for p in paths],
+                     writer.pvd_path.read_text(), result.frames_written, batched)
+    assert (files[True][4] > 100) == bool(thinned)
+    assert files[False][:4] == files[True][:4]
+    assert len(files[True][0]) > 20

@@ -36,12 +36,13 @@ from dda.kernels.small_step import OK, contact_step
 from dda.slip_events import _earliest_crossing
 
 __all__ = ["run_steps", "STEPS_DONE", "NOT_OK", "REVERSAL", "SOFT", "RUN_END", "NORMS",
-           "ROW_FIELDS"]
+           "FRAME", "ROW_FIELDS"]
 
 #: why :func:`run_steps` stopped: ``max_steps`` taken; a step's status was not OK; a step
 #: whose slip reversal is to be located; the soft-spring test failed after the last step;
-#: the next step is the run's last (or a sliver); a step's residual norms did not fit
-STEPS_DONE, NOT_OK, REVERSAL, SOFT, RUN_END, NORMS = 0, 1, 2, 3, 4, 5
+#: the next step is the run's last (or a sliver); a step's residual norms did not fit;
+#: the writer's frame is due at the last step's record
+STEPS_DONE, NOT_OK, REVERSAL, SOFT, RUN_END, NORMS, FRAME = 0, 1, 2, 3, 4, 5, 6
 
 #: the columns of the stats rows :func:`run_steps` returns
 ROW_FIELDS = ("time", "iterations", "open_close_passes", "contacts", "closed", "sliding",
@@ -53,7 +54,7 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
               gravity, carry, k_factor, v_factor, fall, floor, search_factor, locate, wait,
               least, normal_ratio, start_scale, soft_check, soft_threshold, every, since,
               centroid0, has_rigid, has_sliding, max_norms, has_known, d_knowns, known_vs,
-              known_max, full_blocks,
+              known_max, full_blocks, writer_mode, seen, writer_every, due_after,
               newton, x, offsets, nxt, prv, block, free, thickness, size, density,
               elasticity, stress, rotation, centroid, area, sxx, syy, v_eff, dt, d0,
               penetration, min_size, tolerance, min_thickness, max_ratio, pair_keys,
@@ -94,6 +95,10 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
         and largest known move (:meth:`dda.model.Model.known_motion`, worked out by the caller
         for the steps it asks for), and the blocks moved in full (their velocity is their
         move over dt)
+    writer_mode, seen, writer_every, due_after : a writer that thins its series
+        (:class:`dda.io.VTUWriter`): 0 none, 1 every ``writer_every``-th record of those it
+        has ``seen``, 2 the first record at or after ``due_after``; it stops after a step
+        whose record the writer takes (``FRAME``), the caller writes it
 
     Returns
     -------
@@ -265,6 +270,11 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
                 pair_normal[at + i, 1] = nrm[i, 1]
             pair_at[n_rec + 1] = at + keys.shape[0]
             n_rec += 1
+            if (writer_mode == 1 and (seen + n_rec - 1) % writer_every == 0
+                    or writer_mode == 2 and time >= due_after):
+                steps += 1
+                why = FRAME
+                break
         steps += 1
         # ---- the penalty advisor's quick test (PenaltyAdvisor._check_soft)
         if soft_check and m:
