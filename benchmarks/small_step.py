@@ -1,17 +1,22 @@
 """The fixed cost of one step on a 2-block scene (issue 19): a block sliding down an incline.
 
 Run:  python benchmarks/small_step.py [--steps N] [--warmup N] [--record-every N] [--calls]
-                                      [--profile K]
+                                      [--profile K] [--step-by-step]
 
 For both solvers it prints, after a warm-up run:
 
 - ``step``: the median of ``result.stats['wall_time']`` (the step itself: detection, element,
-  solver, guard, the Newmark update, and the commit's bookkeeping around it);
+  solver, guard, the Newmark update, and the commit's bookkeeping around it; a step of a
+  batch taken in one kernel call, :mod:`dda.compiled_run`, its share of the batch);
 - ``loop``: the run's wall time divided by its steps (everything a user pays: the step, the
   recording of every step into the Result, the stats row, the penalty advice);
 - ``cpu``: the run's process time divided by its steps;
 - with ``--calls``: the Python function calls per step (cProfile, recording included);
 - with ``--profile K``: the top K functions by own time, in microseconds per step.
+
+A run takes its steps in batches in one kernel call where it can (:mod:`dda.compiled_run`);
+``--step-by-step`` turns that off (``dda.compiled_run.COMPILED_RUN = False``), for the steps
+one :func:`dda.step.step` call at a time.
 
 The seed rock slope of the paper runs 160,000 steps (dt 1e-4, 16 s): ``loop`` times 160,000
 is what a 2-block scene of it would take.
@@ -79,9 +84,16 @@ def main(argv=None):
     ap.add_argument("--calls", action="store_true", help="count the Python calls per step")
     ap.add_argument("--profile", type=int, default=0, metavar="K",
                     help="print the K functions with the most own time")
+    ap.add_argument("--step-by-step", action="store_true",
+                    help="every step through dda.step.step (no batches in one kernel call)")
     args = ap.parse_args(argv)
+    if args.step_by_step:
+        import dda.compiled_run
+
+        dda.compiled_run.COMPILED_RUN = False
     print(f"2-block incline, dt 1e-4, {args.steps} steps after {args.warmup} of warm-up, "
-          f"recording every {args.record_every}")
+          f"recording every {args.record_every}"
+          + (", step by step" if args.step_by_step else ""))
     for make in (dda.solvers.LegacyPullBack, dda.solvers.NewtonRaphson):
         step, loop, cpu, sim = measure(make(), args.steps, args.warmup,
                                        record_every=args.record_every)

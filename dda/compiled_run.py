@@ -34,7 +34,7 @@ from dda import slip_events
 from dda import step as step_module
 from dda.contact.contacts import ContactSet
 from dda.io.vtu import VTUWriter
-from dda.kernels.run_steps import FRAME, ROW_FIELDS, STEPS_DONE, run_steps
+from dda.kernels.run_steps import FRAME, ROW_FIELDS, RUN_END, STEPS_DONE, run_steps
 from dda.kernels.small_step import contact_step
 from dda.penalty_advice import SOFT_DEPTH, STIFF_CUTS
 from dda.profiling import SECTIONS
@@ -45,9 +45,12 @@ __all__ = ["COMPILED_RUN", "StepRuns"]
 #: take runs of small steps in one kernel call (False: every step through dda.step.step)
 COMPILED_RUN = True
 
-#: the steps of the first batch, and the most of one (a batch is doubled while it takes
-#: under ``BATCH_SECONDS``: Ctrl-C and the progress bar wait for the end of a batch)
+#: the steps of the first batch, and the most of one (a batch that took all its steps in
+#: under ``BATCH_SECONDS`` is doubled: Ctrl-C and the progress bar wait for the end of a
+#: batch; one that a step stopped gives the next twice its steps)
 FIRST_BATCH, MOST_BATCH, BATCH_SECONDS = 64, 2048, 0.05
+#: the fewest steps a batch is given after one that a step stopped
+MIN_BATCH = 16
 #: the longest wait (Python steps) before a batch is tried again after one that took none
 MOST_WAIT = 64
 
@@ -131,7 +134,9 @@ class StepRuns:
         gravity = float(model.gravity or 0.0)
         free = model.free
         start = _time.perf_counter()
-        size, motions = self.size, None
+        # (no more steps than reach the writer's next frame: the known motion of a step the
+        # batch does not take is work lost)
+        size, motions = min(self.size, self._steps_to_frame(writing, state.time, dt)), None
         if model.moves_known:
             motions = _known_motions(model, state, dt, t_end, size)
             size = len(motions[0])
@@ -156,8 +161,12 @@ class StepRuns:
         wall = _time.perf_counter() - start
         if steps == 0:
             return 0, why
-        self.size = (min(MOST_BATCH, 2 * self.size) if wall < BATCH_SECONDS
-                     else max(FIRST_BATCH, self.size // 2))
+        if wall > BATCH_SECONDS:
+            self.size = max(MIN_BATCH, self.size // 2)
+        elif steps == size and why == STEPS_DONE:
+            self.size = min(MOST_BATCH, 2 * self.size)
+        elif why != FRAME and why != RUN_END:  # (stopped by a step: as long again, and more)
+            self.size = max(MIN_BATCH, min(self.size, 2 * steps))
         c = state.contacts
         history = {"g_se": rows[3], "slip": rows[4]}
         if has_sliding:
@@ -204,6 +213,24 @@ class StepRuns:
         # (VTUWriter.due's test, the same numbers)
         due = -np.inf if n == 0 else writer._entries[n - 1][0] + writer.interval * (1 - 1e-9)
         return 2, 0, 1, float(due)
+
+    def _steps_to_frame(self, writing, time, dt) -> int:
+        """The steps from ``time`` to the one whose record the writer takes next, at most
+        MOST_BATCH (writing: :meth:`_writer_arguments`)."""
+        mode, seen, every, due_after = writing
+        if mode == 0:
+            return MOST_BATCH
+        to_record = self.recorder.every - self.recorder.since
+        if mode == 1:  # the record the writer takes: (seen + r) % every == 0, r = 0, 1, ...
+            return min(MOST_BATCH, to_record + ((-seen) % every) * self.recorder.every)
+        steps = 0
+        while steps < MOST_BATCH:
+            steps += 1
+            time = time + dt
+            if steps >= to_record and (steps - to_record) % self.recorder.every == 0 and (
+                    time >= due_after):
+                break
+        return steps
 
     def _frames(self, rec_time, why):
         """The writer's part of the batch's records (Recorder._record's): the frame of the
