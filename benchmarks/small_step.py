@@ -88,9 +88,9 @@ def main(argv=None):
                     help="every step through dda.step.step (no batches in one kernel call)")
     args = ap.parse_args(argv)
     if args.step_by_step:
-        import dda.compiled_run
+        from dda import compiled_run
 
-        dda.compiled_run.COMPILED_RUN = False
+        compiled_run.COMPILED_RUN = False
     print(f"2-block incline, dt 1e-4, {args.steps} steps after {args.warmup} of warm-up, "
           f"recording every {args.record_every}"
           + (", step by step" if args.step_by_step else ""))
