@@ -251,6 +251,7 @@ class StepRuns:
         share = wall / steps
         sections = [0.0] * len(SECTIONS)
         sections[_SOLVE] = share
+        self.result.stats.batched += steps
         append = self.result.stats.append_row
         for i, row in enumerate(stats.tolist()):
             (t, iterations, passes, contacts, closed, sliding, solves, pairs, pen,

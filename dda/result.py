@@ -105,6 +105,9 @@ class StepStats:
         self._row_norms: list = []
         self.cuts: list[tuple[float, float, str]] = []
         self.reversals: list[tuple[float, float]] = []
+        #: steps taken in batches of one kernel call (dda.compiled_run); their wall time is
+        #: their batch's shared evenly, under ``solve_time``
+        self.batched = 0
 
     def append(self, residual_norms=(), **row):
         """Add one step's row (every field of :attr:`FIELDS` by name)."""
@@ -498,6 +501,8 @@ class CostProfile:
         iterations after OPEN-CLOSE, or legacy's solves)
     cuts : dt cuts
     summary : the one-line summary (:meth:`StepStats.summary`)
+    batched : steps taken in batches of one kernel call (:mod:`dda.compiled_run`), whose
+        time is all under ``solve``
     """
 
     steps: int
@@ -510,6 +515,7 @@ class CostProfile:
     solves: int
     cuts: int
     summary: str
+    batched: int = 0
 
     @classmethod
     def from_stats(cls, stats: StepStats) -> CostProfile:
@@ -524,7 +530,7 @@ class CostProfile:
             open_close_passes=int(stats["open_close_passes"].sum()) if n else 0,
             iterations=int(stats["iterations"].sum()) if n else 0,
             solves=int(stats["solves"].sum()) if n else 0, cuts=len(stats.cuts),
-            summary=stats.summary(),
+            summary=stats.summary(), batched=int(getattr(stats, "batched", 0)),
         )
 
     def fractions(self) -> dict:
@@ -545,4 +551,7 @@ class CostProfile:
             f"{self.open_close_passes / self.steps:.2f} OPEN-CLOSE passes, "
             f"{self.iterations / self.steps:.2f} iterations and "
             f"{self.solves / self.steps:.2f} linear solves per step")
+        if self.batched:
+            lines.append(f"{self.batched} of the {self.steps} steps in batches of one kernel "
+                         "call (dda.compiled_run): their time is all under solve")
         return "\n".join(lines)

@@ -139,6 +139,9 @@ def test_records_every_third_step_and_a_partial_carry(monkeypatch):
     sim, result, batched = _run(make, "newton", True, monkeypatch, **kw)
     assert batched >= 100
     assert len(result.time) < len(result.stats) / 2
+    # the profile says which steps it cannot split into parts
+    assert result.stats.batched == batched
+    assert f"{batched} of the {len(result.stats)} steps in batches" in str(result.profile())
     _assert_same(one, _everything(sim, result))
 
 
