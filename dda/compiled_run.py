@@ -30,6 +30,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from dda import recorder as recorder_module
 from dda import slip_events
 from dda import step as step_module
 from dda.contact.contacts import ContactSet
@@ -38,7 +39,6 @@ from dda.kernels.run_steps import FRAME, ROW_FIELDS, RUN_END, STEPS_DONE, run_st
 from dda.kernels.small_step import contact_step
 from dda.penalty_advice import SOFT_DEPTH, STIFF_CUTS
 from dda.profiling import SECTIONS
-from dda.recorder import frame
 
 __all__ = ["COMPILED_RUN", "StepRuns"]
 
@@ -241,7 +241,7 @@ class StepRuns:
         n = len(rec_time)
         for r in range(n):
             if r == n - 1 and why == FRAME:
-                writer.write(frame(self.sim.model, self.sim.committed))
+                writer.write(recorder_module.frame(self.sim.model, self.sim.committed))
             else:
                 writer.skip(float(rec_time[r]))
             self.result.frames_written += 1

@@ -14,7 +14,7 @@ from dda.contact import BartonBandis, CoulombSingle, StaticDynamicTransition
 from dda.penalty_advice import PenaltyWarning
 from dda.progress import ProgressBar
 from dda.solvers import LegacyPullBack, NewtonRaphson
-from tests.conftest import stack_scene
+from tests.conftest import incline_scene, stack_scene
 from tests.stability import scenes
 
 SOLVERS = {"legacy": LegacyPullBack, "newton": NewtonRaphson}
@@ -56,6 +56,8 @@ CASES = {
     "lip": lambda: _stability("lip"),
     "moving base": _moving_base,
     "dragged by its base": _dragged,
+    # a rigid block (3 unknowns; its strain velocities held at zero)
+    "rigid block sliding": lambda: (incline_scene(25.0, rigid=True)[0], 1e-3, 0.3),
 }
 
 
