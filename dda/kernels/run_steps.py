@@ -44,6 +44,11 @@ __all__ = ["run_steps", "STEPS_DONE", "NOT_OK", "REVERSAL", "SOFT", "RUN_END", "
 #: the writer's frame is due at the last step's record
 STEPS_DONE, NOT_OK, REVERSAL, SOFT, RUN_END, NORMS, FRAME = 0, 1, 2, 3, 4, 5, 6
 
+# (typed constants: a literal True or 2 passed to a kernel compiles a second version of it,
+# on Literal[bool] or Literal[int], beside the one Python's calls use)
+_TRUE = np.bool_(True)
+_SLIP, _OPEN = np.int64(2), np.int64(0)
+
 #: the columns of the stats rows :func:`run_steps` returns
 ROW_FIELDS = ("time", "iterations", "open_close_passes", "contacts", "closed", "sliding",
               "solves", "pairs", "penetration", "spring_penetration")
@@ -156,7 +161,7 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
         # ---- the step's start (dda.step._plain_start, search_distance)
         (area_, centroid_, sxx_, syy_, _, k_eff, f_eff, v_eff_,
          speed) = step_start_at(cur_x, offsets, nxt, density, elasticity, gravity, cur_stress,
-                                block, cur_v, carry, k_factor, v_factor, True)
+                                block, cur_v, carry, k_factor, v_factor, _TRUE)
         predicted = speed * dt
         predicted += fall
         step_known = d_known
@@ -205,8 +210,8 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
                         start[b, j] = cur_v[b, j] * start_scale[b]
             phi = _earliest_crossing(c_vertex, c_edge, cur_state, rows[1], c_bj, c_bk, cur_x,
                                      cur_centroid, start, c_vertex, c_edge, new_state,
-                                     new_rows[1], c_bj, c_bk, x_new, c_new, v_new, nxt, 2, 0,
-                                     normal_ratio, 1.0)
+                                     new_rows[1], c_bj, c_bk, x_new, c_new, v_new, nxt, _SLIP,
+                                     _OPEN, normal_ratio, 1.0)
             if phi <= 1.0 and least < phi < 1.0 - least and not phi * dt < least * dt:
                 why = REVERSAL
                 break
