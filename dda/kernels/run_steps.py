@@ -5,11 +5,12 @@ Python between them (:mod:`dda.compiled_run` decides when, and feeds the records
 On the 2-block incline of ``benchmarks/small_step.py`` a step's arithmetic in the kernels is
 about 30 us; the Python around it (the step's start, the arguments and outputs of the kernel
 call, the trial and committed state objects, the report, the stats row, the recorder, the
-reversal check, the step control) about 150 us more. :func:`run_steps` does, step after step,
+reversal check, the step control) 120-150 us more. :func:`run_steps` does, step after step,
 what those do for a step that needs nothing else:
 
 1. the blocks' start (:func:`dda.kernels.blocks.step_start_at`) and the search distance
-   (:func:`dda.step.search_distance`);
+   (:func:`dda.step.search_distance`), with the known increments of a shaken or moved block
+   (worked out by the caller);
 2. :func:`contact_step`; a step with any status other than ``OK`` is not taken;
 3. where the run locates slip reversals (:mod:`dda.slip_events`), the reversal check of
    :meth:`dda.Simulation._reversal_located`; a step that would be taken again shorter is not
@@ -19,8 +20,9 @@ what those do for a step that needs nothing else:
    penalty advisor's quick test for soft springs, after which it stops (Python runs the full
    check).
 
-It stops before a step it does not take, before the last step of the run, and after
-``max_steps``; the caller takes the next step the usual way. Each step uses the same kernels
+It stops before a step it does not take, before the last step of the run, after a step whose
+record a thinned VTU series takes as a frame (the caller writes it), and after ``max_steps``;
+the caller takes the next step the usual way. Each step uses the same kernels
 with the same arguments as :func:`dda.step.step`, so the run is the same to the bit
 (``tests/test_compiled_run.py`` runs scenes both ways).
 """
