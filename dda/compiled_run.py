@@ -39,6 +39,7 @@ from dda.kernels.run_steps import FRAME, ROW_FIELDS, RUN_END, STEPS_DONE, run_st
 from dda.kernels.small_step import contact_step
 from dda.penalty_advice import SOFT_DEPTH, STIFF_CUTS
 from dda.profiling import SECTIONS
+from dda.solvers.linear import DENSE_LIMIT
 
 __all__ = ["COMPILED_RUN", "StepRuns"]
 
@@ -89,7 +90,10 @@ class StepRuns:
                 and simulation.step is _STEP and step_module.contact_step is contact_step
                 and step_module.BLOCK_KERNELS and step_module.SMALL_STEP
                 and model.plain_blocks and model.bolts is None
-                and sim.velocity_carry > 0.0 and model.n_blocks > 1)
+                and sim.velocity_carry > 0.0 and model.n_blocks > 1
+                # (a sparse system is never the one-call step's; and the pattern a try
+                # would build replaces the one its solver keeps, and its analysis)
+                and 6 * int(np.count_nonzero(model.free)) <= DENSE_LIMIT)
 
     def advance(self, t_end: float, bar=None) -> int:
         """Take a batch of steps towards ``t_end`` if it may: the steps taken (0: the run

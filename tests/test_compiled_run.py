@@ -201,6 +201,19 @@ def test_the_progress_bar_counts_a_batch_as_its_steps(monkeypatch):
     assert sum(seen) == len(result.stats) == sim.control.steps
 
 
+def test_a_scene_solved_sparse_tries_no_batch(monkeypatch):
+    """A scene with more unknowns than a dense system takes (the 10 x 10 stack's 600) never
+    takes the one-call step, and a try would replace the system pattern and analysis its
+    solver keeps: no try at all."""
+    tries = []
+    monkeypatch.setattr(compiled_run.StepRuns, "_batch",
+                        lambda self, *a: tries.append(1) or (0, compiled_run.STEPS_DONE))
+    _run(lambda: (stack_scene(10), 1e-3, 0.01), "newton", True, monkeypatch)
+    assert tries == []
+    _run(lambda: (stack_scene(2), 1e-3, 0.01), "newton", True, monkeypatch)
+    assert tries
+
+
 def test_a_failed_batch_waits_longer_each_time(monkeypatch):
     """Where every try of a batch is refused at its first step, the tries thin out (1, 2, 4
     ... 64 steps apart) and the run is the step-by-step one."""
