@@ -35,7 +35,7 @@ from dda import slip_events
 from dda import step as step_module
 from dda.contact.contacts import ContactSet
 from dda.io.vtu import VTUWriter
-from dda.kernels.run_steps import FRAME, ROW_FIELDS, RUN_END, STEPS_DONE, run_steps
+from dda.kernels.run_steps import FRAME, ROW_FIELDS, STEPS_DONE, run_steps
 from dda.kernels.small_step import contact_step
 from dda.penalty_advice import SOFT_DEPTH, STIFF_CUTS
 from dda.profiling import SECTIONS
@@ -138,19 +138,18 @@ class StepRuns:
         gravity = float(model.gravity or 0.0)
         free = model.free
         start = _time.perf_counter()
-        # (no more steps than reach the writer's next frame: the known motion of a step the
-        # batch does not take is work lost)
-        size, motions = min(self.size, self._steps_to_frame(writing, state.time, dt)), None
-        if model.moves_known:
-            motions = _known_motions(model, state, dt, t_end, size)
-            size = len(motions[0])
-            if size == 0:
-                return 0, STEPS_DONE
+        # whole steps of dt, none the run's last, and no more than reach the writer's next
+        # frame (the known motion of a step the batch does not take is work lost)
+        size = _whole_steps(control, state.time, t_end,
+                            min(self.size, self._steps_to_frame(writing, state.time, dt)))
+        if size == 0:
+            return 0, STEPS_DONE
+        motions = _known_motions(model, state, dt, size) if model.moves_known else None
         (steps, why, t, x, velocity, stress, rotation, centroid, c_state, rows, last_move,
          untracked, penetration, wait, since, stats, norms, n_norms, records, rec_time,
          rec_disp, rec_rot, rec_vel, rec_stress, pair_at, pair_keys, pair_force,
          pair_normal) = run_steps(
-            size, t_end - 1e-12 * max(1.0, t_end), float(t_end), state.velocity,
+            size, state.velocity,
             state.centroid, float(state.last_move), float(state.untracked), float(state.time),
             gravity, float(carry), 2.0 / dt**2, 2.0 / dt, 0.5 * abs(gravity) * dt * dt,
             1e-6 * model.min_size, float(step_module.SEARCH_FACTOR),
@@ -169,7 +168,7 @@ class StepRuns:
             self.size = max(MIN_BATCH, self.size // 2)
         elif steps == size and why == STEPS_DONE:
             self.size = min(MOST_BATCH, 2 * self.size)
-        elif why != FRAME and why != RUN_END:  # (stopped by a step: as long again, and more)
+        elif why != FRAME:  # (stopped by a step: as long again, and more)
             self.size = max(MIN_BATCH, min(self.size, 2 * steps))
         c = state.contacts
         history = {"g_se": rows[3], "slip": rows[4]}
@@ -200,33 +199,30 @@ class StepRuns:
         return steps, why
 
     def _writer_arguments(self, state):
-        """The kernel's ``(writer_mode, seen, writer_every, due_after)`` for the run's
-        writer, or None when a batch may not take the next step (the writer has a frame after
-        the committed state: a resumed run's)."""
+        """The kernel's ``(writer_mode, frames_to_due, due_after)`` for the run's writer, or
+        None when a batch may not take the next step (the writer has a frame after the
+        committed state: a resumed run's)."""
         writer = self.recorder.writer
         if writer is None:
-            return 0, 0, 1, 0.0
+            return 0, 0, 0.0
         last = writer.last_time
         if last is None and writer is self.recorder.written[0]:
             last = self.recorder.written[1]
         if last is not None and not last <= state.time:
             return None
         if writer.interval is None:
-            return 1, int(writer._seen), int(writer.every), 0.0
-        n = writer._n
-        # (VTUWriter.due's test, the same numbers)
-        due = -np.inf if n == 0 else writer._entries[n - 1][0] + writer.interval * (1 - 1e-9)
-        return 2, 0, 1, float(due)
+            return 1, int(writer.frames_to_due()), 0.0
+        return 2, 0, float(writer.due_after())
 
     def _steps_to_frame(self, writing, time, dt) -> int:
         """The steps from ``time`` to the one whose record the writer takes next, at most
         MOST_BATCH (writing: :meth:`_writer_arguments`)."""
-        mode, seen, every, due_after = writing
+        mode, frames_to_due, due_after = writing
         if mode == 0:
             return MOST_BATCH
         to_record = self.recorder.every - self.recorder.since
-        if mode == 1:  # the record the writer takes: (seen + r) % every == 0, r = 0, 1, ...
-            return min(MOST_BATCH, to_record + ((-seen) % every) * self.recorder.every)
+        if mode == 1:
+            return min(MOST_BATCH, to_record + frames_to_due * self.recorder.every)
         steps = 0
         while steps < MOST_BATCH:
             steps += 1
@@ -287,19 +283,27 @@ def _full_blocks(model) -> np.ndarray:
     return kept
 
 
-def _known_motions(model, state, dt, t_end, size):
-    """The known motion of each step a batch may take from ``state`` (at most ``size``,
-    none past the run's last): ``(known_u, d_known, known_v, largest known move, shaking)``
-    per step, as :func:`dda.step.step` works them out (:meth:`dda.model.Model.
-    known_motion`)."""
+def _whole_steps(control, time, t_end, most) -> int:
+    """How many of the next steps from ``time`` (at most ``most``) the step control gives the
+    whole dt (:meth:`dda.step_control.StepControl.step_size`), none of them the run's last
+    (Simulation._steps' end test): the steps a batch may take."""
     guard = t_end - 1e-12 * max(1.0, t_end)
+    dt = control.dt
+    steps = 0
+    while steps < most and control.step_size(t_end - time) == dt and time + dt < guard:
+        time = time + dt
+        steps += 1
+    return steps
+
+
+def _known_motions(model, state, dt, steps):
+    """The known motion of each of the next ``steps`` steps from ``state``: ``(known_u,
+    d_known, known_v, largest known move, shaking)`` per step, as :func:`dda.step.step` works
+    them out (:meth:`dda.model.Model.known_motion`)."""
     free = model.free
     us, ds, vs, most, shakings = [], [], [], [], []
     t, known_u, shaking = state.time, state.known_u, state.shaking
-    for _ in range(size):
-        remaining = t_end - t
-        if not (dt <= remaining and not remaining - dt < 1e-6 * dt and t + dt < guard):
-            break
+    for _ in range(steps):
         t = t + dt
         u, v, shaking = model.known_motion(t, known_u, shaking)
         d_known = np.zeros((model.n_blocks, 6))
@@ -313,6 +317,4 @@ def _known_motions(model, state, dt, t_end, size):
         vs.append(v)
         shakings.append(shaking)
         known_u = u
-    if not us:
-        return [], None, None, None, []
     return us, np.array(ds), np.array(vs), np.array(most), shakings

@@ -175,11 +175,21 @@ class VTUWriter:
         """Whether :meth:`write` would write a file for a frame at ``time`` (s) given now
         (the run's ``last`` frame always is). A recorder asks before it builds the frame: a
         thinned series costs no frame for the steps it skips."""
-        n = self._n
         if self.interval is not None:
-            # (a relative slack: frame times are sums of steps, 0.05 may come as 0.0499999...)
-            return n == 0 or time >= self._entries[n - 1][0] + self.interval * (1 - 1e-9)
-        return self._seen % self.every == 0
+            return time >= self.due_after()
+        return self.frames_to_due() == 0
+
+    def due_after(self) -> float:
+        """With ``interval``: the time from which a frame is :meth:`due` (-inf before the
+        first is written)."""
+        n = self._n
+        # (a relative slack: frame times are sums of steps, 0.05 may come as 0.0499999...)
+        return -np.inf if n == 0 else self._entries[n - 1][0] + self.interval * (1 - 1e-9)
+
+    def frames_to_due(self) -> int:
+        """With ``every``: the frames given to :meth:`write` or :meth:`skip` before the next
+        one that is :meth:`due` (0: the next is)."""
+        return (-self._seen) % self.every
 
     def skip(self, time: float) -> None:
         """Count a frame at ``time`` that is not :meth:`due`, as :meth:`write` would."""

@@ -20,10 +20,11 @@ what those do for a step that needs nothing else:
    penalty advisor's quick test for soft springs, after which it stops (Python runs the full
    check).
 
-It stops before a step it does not take, before the last step of the run, after a step whose
-record a thinned VTU series takes as a frame (the caller writes it), and after ``max_steps``;
-the caller takes the next step the usual way. Each step uses the same kernels
-with the same arguments as :func:`dda.step.step`, so the run is the same to the bit
+It stops before a step it does not take, after a step whose record a thinned VTU series
+takes as a frame (the caller writes it), and after ``max_steps`` (none of them the run's
+last: the caller counts them); the caller takes the next step the usual way. Each step uses
+the same kernels with the same arguments as :func:`dda.step.step`, so the run is the same to
+the bit
 (``tests/test_compiled_run.py`` runs scenes both ways).
 """
 
@@ -37,14 +38,13 @@ from dda.kernels.forces import pair_force_sums
 from dda.kernels.small_step import OK, contact_step
 from dda.slip_events import _earliest_crossing
 
-__all__ = ["run_steps", "STEPS_DONE", "NOT_OK", "REVERSAL", "SOFT", "RUN_END", "NORMS",
-           "FRAME", "ROW_FIELDS"]
+__all__ = ["run_steps", "STEPS_DONE", "NOT_OK", "REVERSAL", "SOFT", "NORMS", "FRAME",
+           "ROW_FIELDS"]
 
 #: why :func:`run_steps` stopped: ``max_steps`` taken; a step's status was not OK; a step
-#: whose slip reversal is to be located; the soft-spring test failed after the last step;
-#: the next step is the run's last (or a sliver); a step's residual norms did not fit;
-#: the writer's frame is due at the last step's record
-STEPS_DONE, NOT_OK, REVERSAL, SOFT, RUN_END, NORMS, FRAME = 0, 1, 2, 3, 4, 5, 6
+#: whose slip reversal is to be located; the soft-spring test failed after the last step; a
+#: step's residual norms did not fit; the writer's frame is due at the last step's record
+STEPS_DONE, NOT_OK, REVERSAL, SOFT, NORMS, FRAME = 0, 1, 2, 3, 4, 5
 
 # (typed constants: a literal True or 2 passed to a kernel compiles a second version of it,
 # on Literal[bool] or Literal[int], beside the one Python's calls use)
@@ -57,11 +57,11 @@ ROW_FIELDS = ("time", "iterations", "open_close_passes", "contacts", "closed", "
 
 
 @njit(cache=True)
-def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untracked, time,
+def run_steps(max_steps, velocity, s_centroid, last_move, untracked, time,
               gravity, carry, k_factor, v_factor, fall, floor, search_factor, locate, wait,
               least, normal_ratio, start_scale, soft_check, soft_threshold, every, since,
               centroid0, has_rigid, has_sliding, max_norms, has_known, d_knowns, known_vs,
-              known_max, full_blocks, writer_mode, seen, writer_every, due_after,
+              known_max, full_blocks, writer_mode, frames_to_due, due_after,
               newton, x, offsets, nxt, prv, block, free, thickness, size, density,
               elasticity, stress, rotation, centroid, area, sxx, syy, v_eff, dt, d0,
               penetration, min_size, tolerance, min_thickness, max_ratio, pair_keys,
@@ -78,9 +78,8 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
     of the state, ``x`` to ``penetration``, ``c_state`` to ``c_sliding``, ``block_k`` and
     ``block_f``, are made again for every step here); before them:
 
-    max_steps : the most steps to take
-    t_guard, t_end : the run's end less its tolerance (a step that reaches ``t_guard`` is the
-        last, taken by the caller), and its end
+    max_steps : the steps to take at most: each a whole step of ``dt`` and none the run's
+        last (:meth:`dda.step_control.StepControl.step_size`, counted by the caller)
     velocity, s_centroid, last_move, untracked, time : the rest of the committed state
         (:class:`dda.step.StepState`'s ``velocity``, ``centroid``, ``last_move``,
         ``untracked``, ``time``)
@@ -102,11 +101,10 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
         and largest known move (:meth:`dda.model.Model.known_motion`, worked out by the caller
         for the steps it asks for), and the blocks moved in full (their velocity is their
         move over dt)
-    writer_mode, seen, writer_every, due_after : a writer that thins its series
-        (:class:`dda.io.VTUWriter`): 0 none, 1 every ``writer_every``-th record of those it
-        has ``seen``, 2 the first record at or after ``due_after``; it stops after a step
-        whose record the writer takes (``FRAME``), the caller writes it
-
+    writer_mode, frames_to_due, due_after : a writer that thins its series
+        (:class:`dda.io.VTUWriter`): 0 none, 1 the record after ``frames_to_due`` others
+        (``every``), 2 the first record at or after ``due_after`` (``interval``); it stops
+        after a step whose record the writer takes (``FRAME``), the caller writes it
     Returns
     -------
     steps, why : the steps taken and why it stopped (``STEPS_DONE`` ...)
@@ -154,12 +152,6 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
     steps = 0
     why = STEPS_DONE
     while steps < max_steps:
-        # the step control's size (StepControl.step_size): the whole dt, not the run's last
-        remaining = t_end - time
-        if not (dt <= remaining and not remaining - dt < 1e-6 * dt
-                and time + dt < t_guard):
-            why = RUN_END
-            break
         # ---- the step's start (dda.step._plain_start, search_distance)
         (area_, centroid_, sxx_, syy_, _, k_eff, f_eff, v_eff_,
          speed) = step_start_at(cur_x, offsets, nxt, density, elasticity, gravity, cur_stress,
@@ -277,7 +269,7 @@ def run_steps(max_steps, t_guard, t_end, velocity, s_centroid, last_move, untrac
                 pair_normal[at + i, 1] = nrm[i, 1]
             pair_at[n_rec + 1] = at + keys.shape[0]
             n_rec += 1
-            if (writer_mode == 1 and (seen + n_rec - 1) % writer_every == 0
+            if (writer_mode == 1 and n_rec - 1 == frames_to_due
                     or writer_mode == 2 and time >= due_after):
                 steps += 1
                 why = FRAME
