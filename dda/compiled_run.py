@@ -174,7 +174,7 @@ class StepRuns:
         history = {"g_se": rows[3], "slip": rows[4]}
         if has_sliding:
             history["sliding"] = rows[5]
-        moved = {} if motions is None else {"known_u": motions[0][steps - 1],
+        moved = {} if motions is None else {"known_u": motions[0][steps - 1].copy(),
                                              "shaking": motions[4][steps - 1]}
         sim.committed = replace(
             state, **moved, time=float(t), x=x, velocity=velocity, stress=stress, rotation=rotation,
@@ -298,23 +298,41 @@ def _whole_steps(control, time, t_end, most) -> int:
 
 def _known_motions(model, state, dt, steps):
     """The known motion of each of the next ``steps`` steps from ``state``: ``(known_u,
-    d_known, known_v, largest known move, shaking)`` per step, as :func:`dda.step.step` works
-    them out (:meth:`dda.model.Model.known_motion`)."""
+    d_known, known_v, largest known move, shaking)``, each indexed by step, as
+    :func:`dda.step.step` works them out one step at a time
+    (:meth:`dda.model.Model.known_motion`), to the same bits: the shaken blocks' histories
+    over all the steps at once (:meth:`dda.effects.AccelerationHistory.advance_many`)."""
     free = model.free
-    us, ds, vs, most, shakings = [], [], [], [], []
-    t, known_u, shaking = state.time, state.known_u, state.shaking
-    for _ in range(steps):
+    times = np.empty(steps)
+    t = state.time
+    for k in range(steps):  # (the times as the steps reach them: t + dt, one by one)
         t = t + dt
-        u, v, shaking = model.known_motion(t, known_u, shaking)
-        d_known = np.zeros((model.n_blocks, 6))
-        d_known[:, :2] = u - known_u
-        d_known[free] = 0.0
-        known_du = d_known[~free, :2]
-        most.append(float(np.hypot(known_du[:, 0], known_du[:, 1]).max()) if len(known_du)
-                    else 0.0)
-        us.append(u)
-        ds.append(d_known)
-        vs.append(v)
-        shakings.append(shaking)
-        known_u = u
-    return us, np.array(ds), np.array(vs), np.array(most), shakings
+        times[k] = t
+    us = np.repeat(state.known_u[None], steps, axis=0)
+    vs = np.zeros((steps, model.n_blocks, 2))
+    histories = []
+    for s, start in zip(model.shakes, state.shaking, strict=True):
+        u, v, after = s.history.advance_many(start, times)
+        us[:, s.block], vs[:, s.block] = u, v
+        histories.append(after)
+    for m in model.full_motions:
+        for k, t in enumerate(times.tolist()):
+            us[k, m.block] = m.displacement(t)
+    ds = np.zeros((steps, model.n_blocks, 6))
+    ds[:, :, :2] = np.diff(us, axis=0, prepend=state.known_u[None])
+    ds[:, free] = 0.0
+    known = ds[:, ~free, :2]
+    most = (np.hypot(known[..., 0], known[..., 1]).max(axis=1) if known.shape[1]
+            else np.zeros(steps))
+    shakings = _Shakings(histories)
+    return us, ds, vs, most, shakings
+
+
+class _Shakings:
+    """``shakings[k]``: the state's ``shaking`` after the k-th step of a batch."""
+
+    def __init__(self, histories):
+        self.histories = histories
+
+    def __getitem__(self, k: int) -> tuple:
+        return tuple(h[k] for h in self.histories)

@@ -10,6 +10,8 @@ from bisect import bisect_left, bisect_right
 
 import numpy as np
 
+from dda.kernels.shaking import gauss_legendre_steps
+
 # 5-point Gauss-Legendre rule on [0, 1]: exact for polynomials up to degree 9
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(5)
 _GL_X = 0.5 * (_GL_X + 1.0)
@@ -220,47 +222,102 @@ class AccelerationHistory:
         keeps its ``start``. A callable is integrated from ``start`` to ``t`` exactly::
 
             u(t) = u0 + v0 h + int_0^h (h - s) a(t0 + s) ds,   v(t) = v0 + int_0^h a(t0 + s) ds
+
+        (:func:`dda.kernels.shaking.gauss_legendre_steps`, the kernel of
+        :meth:`advance_many` too).
         """
         if self._callable is None:
-            u, v = self._sampled(t)
-            return u, v, None
+            u, v = self._sampled(np.array([t], dtype=float))
+            return u[0], v[0], None
         t0, v0, u0 = start
         if t < t0 - 1e-15:
             t0, v0, u0 = 0.0, np.zeros(2), np.zeros(2)
         if t - t0 <= 0.0:
             return u0.copy(), v0.copy(), (t0, v0, u0)
+        u, v = self._integrated(t0, v0, u0, np.array([t], dtype=float))
+        return u[0].copy(), v[0].copy(), (t, v[0], u[0])
+
+    def advance_many(self, start, times: np.ndarray):
+        """:meth:`advance` over a run of steps ending at ``times`` (increasing, each after
+        ``start``'s time), to the same bits as a call for each in turn.
+
+        Returns ``(u, v, states)``: (K, 2) displacement and velocity at each time, and
+        ``states[k]`` the integrator's state after the k-th (None for a record).
+        """
+        times = np.asarray(times, dtype=float)
+        if self._callable is None:
+            u, v = self._sampled(times)
+            return u, v, _States(None, u, v)
+        t0, v0, u0 = start
+        if not (len(times) and times[0] - t0 > 0.0 and np.all(np.diff(times) > 0.0)):
+            raise ValueError(f"{self.name}: advance_many needs times after the start's, "
+                             "increasing")
+        u, v = self._integrated(t0, v0, u0, times)
+        return u, v, _States(times, u, v)
+
+    def _integrated(self, t0, v0, u0, times):
+        """(K, 2) u and v at ``times`` from ``(t0, v0, u0)``, each step split at the
+        breakpoints inside it."""
         b = self.__dict__.get("_break_list")
         if b is None:  # (the breakpoints as a list: bisect on it costs a tenth of searchsorted)
             b = self.__dict__["_break_list"] = self._breaks.tolist()
-        inside = b[bisect_right(b, t0):bisect_left(b, t)] if b else ()
-        u, v, a0 = u0, v0, t0
-        for a1 in (*inside, t):  # split at the callable's breakpoints (rarely any)
-            h = a1 - a0
-            s = h * _GL_X
-            a = self._called(a0 + s)
-            u = u + v * h + h * ((_GL_W * (h - s)) @ a)
-            v = v + h * (_GL_W @ a)
-            a0 = a1
-        return u.copy(), v.copy(), (t, v, u)
+        t_last = float(times[-1])
+        if b and bisect_left(b, t_last) > bisect_right(b, t0):
+            begin, end, last = [], [], []
+            a0 = t0
+            for t in times.tolist():  # (rarely: a step across a breakpoint)
+                for a1 in (*b[bisect_right(b, a0):bisect_left(b, t)], t):
+                    begin.append(a0)
+                    end.append(a1)
+                    last.append(a1 == t)
+                    a0 = a1
+            begin, end = np.array(begin), np.array(end)
+            last = np.array(last, dtype=np.bool_)
+        else:
+            begin = np.empty(len(times))
+            begin[0] = t0
+            begin[1:] = times[:-1]
+            end, last = times, np.ones(len(times), dtype=np.bool_)
+        at = begin[:, None] + (end - begin)[:, None] * _GL_X
+        a = self._called(at.reshape(-1)).reshape(len(begin), len(_GL_X), 2)
+        return gauss_legendre_steps(np.asarray(u0, dtype=float), np.asarray(v0, dtype=float),
+                                    begin, end, last, a, _GL_W, _GL_X)
 
     def state(self, t: float) -> tuple[np.ndarray, np.ndarray]:
         """Displacement and velocity at time t (callables must be queried in increasing t;
         the simulation uses the pure :meth:`advance`)."""
         if self._callable is None:
-            return self._sampled(t)
+            u, v = self._sampled(np.array([t], dtype=float))
+            return u[0], v[0]
         u, v, (self._t, self._v, self._u) = self.advance((self._t, self._v, self._u), t)
         return u, v
 
-    def _sampled(self, t):
+    def _sampled(self, t: np.ndarray):
+        """(K, 2) u and v of a record at the times ``t`` (the same arithmetic for one time
+        and for many)."""
         ts = self._times
-        i = int(np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2))
-        s = t - ts[i]
-        h = ts[i + 1] - ts[i]
+        i = np.clip(np.searchsorted(ts, t, side="right") - 1, 0, len(ts) - 2)
+        s = (t - ts[i])[:, None]
+        h = (ts[i + 1] - ts[i])[:, None]
         a0 = self._acc[i]
         slope = (self._acc[i + 1] - a0) / h
-        v = self._vel[i] + a0 * s + 0.5 * slope * s * s
-        u = self._disp[i] + self._vel[i] * s + 0.5 * a0 * s * s + slope * s**3 / 6.0
+        vel = self._vel[i]
+        v = vel + a0 * s + 0.5 * slope * s * s
+        u = self._disp[i] + vel * s + 0.5 * a0 * s * s + slope * s**3 / 6.0
         return u, v
+
+
+class _States:
+    """The integrator's states after each step of :meth:`AccelerationHistory.advance_many`:
+    ``(t, v, u)`` for a callable, None for a record."""
+
+    def __init__(self, times, u, v):
+        self.times, self.u, self.v = times, u, v
+
+    def __getitem__(self, k: int):
+        if self.times is None:
+            return None
+        return float(self.times[k]), self.v[k].copy(), self.u[k].copy()
 
 
 class DisplacementHistory:

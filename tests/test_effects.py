@@ -31,6 +31,57 @@ def test_recorded_shake_is_exact_for_piecewise_linear():
     assert hist.state(0.5)[0][0] == pytest.approx(0.5**3 / 3, rel=1e-14)
 
 
+def _kinked(t):
+    """A wave with a kink and a jump at its breakpoints, and a quadratic y."""
+    level = 1.0 if t < 0.0105 else 2.0
+    return (level * np.cos(7.0 * t) + max(0.0, t - 0.031), 0.3 * t * t)
+
+
+_kinked.breakpoints = [0.0105, 0.031, 0.04]
+
+
+@pytest.mark.parametrize("history", [
+    AccelerationHistory(_kinked),
+    AccelerationHistory(np.array([0.0, 0.3, -0.2, 0.5]), np.array([0.0, 0.013, 0.02, 0.05])),
+], ids=["callable with breakpoints", "record"])
+def test_a_batch_of_steps_integrates_as_its_steps_one_by_one(history):
+    # (dda.compiled_run works the shaking out for a batch of steps at once: the same bits as
+    # dda.step.step's advance, step by step, also across breakpoints and a break that falls
+    # on a step's end)
+    dt = 1e-3
+    times = []
+    t, state, u1, v1, states1 = 0.0, history.initial(), [], [], []
+    for _ in range(45):
+        t = t + dt
+        times.append(t)
+        u, v, state = history.advance(state, t)
+        u1.append(u)
+        v1.append(v)
+        states1.append(state)
+    for first in (0, 10, 31):  # from rest, and from a state inside the run
+        start = history.initial() if first == 0 else states1[first - 1]
+        u, v, states = history.advance_many(start, np.array(times[first:]))
+        assert np.array_equal(u, np.array(u1[first:]))
+        assert np.array_equal(v, np.array(v1[first:]))
+        for k in (0, 12, len(times) - first - 1):
+            if states1[first + k] is None:
+                assert states[k] is None
+            else:
+                assert all(np.array_equal(a, b) for a, b in zip(states[k], states1[first + k],
+                                                                 strict=True))
+
+
+def test_a_batch_of_steps_reaches_the_exact_integrals_of_a_polynomial():
+    # 5-point Gauss-Legendre is exact to degree 9: a = t^3 gives v = t^4 / 4, u = t^5 / 20
+    history = AccelerationHistory(lambda t: (t**3, 1.0))
+    u, v, _ = history.advance_many(history.initial(), np.linspace(0.1, 1.0, 10))
+    assert v[:, 0] == pytest.approx(np.linspace(0.1, 1.0, 10) ** 4 / 4, rel=1e-14, abs=1e-16)
+    assert u[:, 0] == pytest.approx(np.linspace(0.1, 1.0, 10) ** 5 / 20, rel=1e-14, abs=1e-17)
+    assert u[-1, 1] == pytest.approx(0.5, rel=1e-15)
+    with pytest.raises(ValueError, match="advance_many needs times after"):
+        history.advance_many((0.5, np.zeros(2), np.zeros(2)), np.array([0.4, 0.6]))
+
+
 def test_shaken_block_follows_its_history_and_carries_a_stuck_block():
     amp, f = 1.0, 2.0  # 0.1 g: far below tan(45) g, so the top block sticks
     scene, table, top = shaken_block_scene(phi=45, amplitude=amp, freq=f)
