@@ -78,6 +78,15 @@ def cmd_run(args):
     if not path.is_file():
         raise SystemExit(f"dda run: no file {path}")
     if path.suffix == ".py":
+        given = [flag for flag, on in (("--duration", args.duration is not None),
+                                       ("--no-progress", args.no_progress),
+                                       ("--allow-outside-output", args.allow_outside_output))
+                 if on]
+        if given:  # (a script reads its own arguments; these would be dropped silently)
+            raise SystemExit(
+                f"dda run: {', '.join(given)} applies to a scene file or a checkpoint, not to "
+                f"a script; a script gets --out only, in its sys.argv (run it as "
+                f"'python {path} ...' to give it its own options)")
         _run_script(path, args.out)
     elif path.suffix == ".ckpt":
         _resume(path, args.duration, _progress(args), args.allow_outside_output)
@@ -94,7 +103,7 @@ def _progress(args) -> bool:
 def cmd_demo(args):
     demo = resources.files("dda") / "scenes" / "demo.toml"
     with resources.as_file(demo) as path:
-        _run_scene(path, args.out or "out/demo", args.duration, _progress(args))
+        _run_scene(path, args.out or "out/stack_demo", args.duration, _progress(args))
     return 0
 
 
@@ -327,7 +336,7 @@ def main(argv=None) -> int:
                    "file's folder with '..', and a resumed checkpoint write its VTU series "
                    "outside the checkpoint's folder (both refused by default)")
     p.set_defaults(func=cmd_run)
-    p = sub.add_parser("demo", help="run a shaken stack of blocks (writes out/demo)")
+    p = sub.add_parser("demo", help="run a shaken stack of blocks (writes out/stack_demo)")
     p.add_argument("--out", help="output folder")
     p.add_argument("--duration", type=float, help="simulated time (s)")
     p.add_argument("--no-progress", action="store_true")

@@ -458,6 +458,9 @@ def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
     from PIL import Image
 
     entries = read_pvd(pvd)
+    if not -len(entries) <= frame < len(entries):
+        raise ValueError(f"frame {frame} is not in {pvd}: it has {len(entries)} frames "
+                         f"(0 to {len(entries) - 1}, or -1 for the last)")
     time, file = entries[frame]
     frames = _Frames([file, file], field, size, relative_to)
     png = Path(png)

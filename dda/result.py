@@ -11,6 +11,10 @@ from dda.profiling import SECTIONS
 
 __all__ = ["Result", "StepStats", "Frame", "CostProfile"]
 
+#: the share of a run's wall time from which its profile says how much of it numba spent
+#: compiling or loading the kernels
+KERNEL_NOTE = 0.05
+
 
 @dataclass
 class Frame:
@@ -108,6 +112,9 @@ class StepStats:
         #: steps taken in batches of one kernel call (dda.compiled_run); their wall time is
         #: their batch's shared evenly, under ``solve_time``
         self.batched = 0
+        #: seconds of the run in which numba compiled its kernels or loaded them from its
+        #: cache (a process's first steps; the profile's parts include what fell in a step)
+        self.kernel_time = 0.0
 
     def append(self, residual_norms=(), **row):
         """Add one step's row (every field of :attr:`FIELDS` by name)."""
@@ -503,6 +510,9 @@ class CostProfile:
     summary : the one-line summary (:meth:`StepStats.summary`)
     batched : steps taken in batches of one kernel call (:mod:`dda.compiled_run`), whose
         time is all under ``solve``
+    kernel_time : seconds of the run in which numba compiled the kernels or loaded them
+        from its cache (most of it inside the steps' ``wall``, in the parts that first called
+        them)
     """
 
     steps: int
@@ -516,6 +526,7 @@ class CostProfile:
     cuts: int
     summary: str
     batched: int = 0
+    kernel_time: float = 0.0
 
     @classmethod
     def from_stats(cls, stats: StepStats) -> CostProfile:
@@ -531,6 +542,7 @@ class CostProfile:
             iterations=int(stats["iterations"].sum()) if n else 0,
             solves=int(stats["solves"].sum()) if n else 0, cuts=len(stats.cuts),
             summary=stats.summary(), batched=int(getattr(stats, "batched", 0)),
+            kernel_time=float(getattr(stats, "kernel_time", 0.0)),
         )
 
     def fractions(self) -> dict:
@@ -554,4 +566,9 @@ class CostProfile:
         if self.batched:
             lines.append(f"{self.batched} of the {self.steps} steps in batches of one kernel "
                          "call (dda.compiled_run): their time is all under solve")
+        if self.kernel_time >= KERNEL_NOTE * max(self.wall, 1e-9):
+            lines.append(f"numba compiled its kernels or loaded them from its cache for "
+                         f"{self.kernel_time:.3g} s of the run (a process's first steps; an "
+                         "install's first run compiles them, once): the parts above include it "
+                         "where it fell in them")
         return "\n".join(lines)

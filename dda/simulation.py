@@ -14,6 +14,7 @@ import time as _time
 from pathlib import Path
 
 import numpy as np
+from numba.core import event as numba_event
 
 from dda import slip_events
 from dda._checks import finite_number
@@ -292,7 +293,10 @@ class Simulation:
         # Ctrl-C and SIGTERM stop the run at the end of a step until the writer is closed (a
         # second one during the checkpoint save must not kill the process before the files
         # are complete); one BLAS thread
-        with run_environment() as interrupts:
+        with run_environment() as interrupts, numba_event.install_listener(
+                "numba:compiler_lock", numba_event.TimingListener()) as kernels:
+            # (numba holds its compiler lock while it compiles a kernel or loads one from its
+            # cache: the start-up of a process's first run, not the steps' own cost)
             try:
                 self._steps(result, t_end, recorder, writer, checkpoint, watchers,
                             interrupts)
@@ -308,6 +312,9 @@ class Simulation:
                 print(self._stopped(checkpoint), file=sys.stderr, flush=True)
                 raise
             finally:
+                if kernels.done:
+                    result.stats.kernel_time = (getattr(result.stats, "kernel_time", 0.0)
+                                                + kernels.duration)
                 if bar:
                     bar.close()
                 if writer is not None:

@@ -17,7 +17,7 @@ file in the output folder and read back as any record is.
 The example cuts a smaller slope by default, the same section scaled to 8 m high, so that
 it runs in seconds; ``--full`` shakes the 20 m slope of ``jointed_slope.py``. With the
 defaults (the synthetic 4 s record at 100 Hz, 0.3 g, legacy DDA, dt 2e-3 s asked for) it cuts
-62 blocks (17 on the face) and takes 8 to 11 s (2,044 steps, 6 cut, 1.8 OPEN-CLOSE passes a step);
+62 blocks (17 on the face) and takes 8 to 11 s (2,032 steps, 6 cut, 1.85 OPEN-CLOSE passes a step);
 the face blocks slip about 3 mm during the 0.3 g pulse at 0.5 s and a little more at 1.1 s,
 and end 3.2 mm (median) and 3.6 mm (most) from where they started relative to the base,
 which ends 4.7 mm from its start (the record's own displacement, 4.69 mm: the synthetic

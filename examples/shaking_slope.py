@@ -1,9 +1,11 @@
 """A two-block rock slope on a shaking table: the main demo.
 
-The geometry and materials follow the shaking-table test of Sueoka et al. (METHOD.md section 9,
-fourth row): two limestone blocks 380 mm wide, the upper one 130 mm high, on a joint dipping
-15 degrees; E = 7 GPa, nu = 0.33, unit weight 22 kN/m^3; kn = 10 GN/m. The lower block is
-bolted to the table, which shakes horizontally at 2 Hz with an amplitude raised in steps.
+The geometry and materials follow the shaking-table test of S 3(2) (Adachi et al. 2017;
+METHOD.md section 9; :func:`dda.studies.cases.rock_slope`): two Ryukyu limestone blocks on a
+joint dipping 15 degrees, the lower one's face 380 mm wide along x, the upper block 240 mm
+along x and 130 mm high; E = 7 GPa, nu = 0.33, unit weight 22 kN/m^3; kn = 10 GN/m. The
+lower block is bolted to the table, which shakes horizontally at 2 Hz with an amplitude
+raised in steps.
 
 With one friction angle phi the upper block first slides down the joint when the table
 accelerates away from the slope's toe faster than the joint can hold:

@@ -230,6 +230,22 @@ def test_run_a_script_passes_out(tmp_path):
     assert (tmp_path / "flag").read_text() == "ran"
 
 
+def test_run_a_script_refuses_the_options_it_would_drop(tmp_path, capsys):
+    # (a script reads its own arguments: --duration and --no-progress used to be ignored)
+    script = tmp_path / "script.py"
+    script.write_text("open(__file__ + '.ran', 'w').write('ran')\n")
+    for extra in (["--duration", "1"], ["--no-progress"]):
+        with pytest.raises(SystemExit, match=f"dda run: {extra[0]} applies to a scene file"):
+            main(["run", str(script), *extra])
+    assert not (tmp_path / "script.py.ran").exists()
+
+
+def test_render_names_a_frame_the_series_does_not_have(series, tmp_path, capsys):
+    _, pvd = series
+    assert main(["render", str(pvd), "--png", str(tmp_path / "x.png"), "--frame", "999"]) == 2
+    assert "frame 999 is not in" in capsys.readouterr().err
+
+
 def test_demo_and_the_console_entry_point(tmp_path):
     proc = subprocess.run([sys.executable, "-m", "dda", "demo", "--out", str(tmp_path),
                            "--duration", "0.05", "--no-progress"],

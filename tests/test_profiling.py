@@ -142,3 +142,32 @@ def test_a_scene_without_free_blocks_solves_nothing():
     assert result.stats["solves"].sum() == 0
     assert result.stats["solve_time"].sum() == 0.0
     assert result.profile().solves == 0
+
+
+def test_the_profile_tells_the_kernels_start_up_from_the_steps():
+    # (a fresh install's first run booked minutes of numba compiling under "solve"; a
+    # process's first run also loads the kernels from numba's cache)
+    import subprocess
+    import sys
+
+    script = """
+import dda
+from tests.stability import scenes
+from dda.contact import CoulombSingle
+scene = scenes.incline(CoulombSingle(phi=30.0))[0]
+first = dda.Simulation(scene, dt=1e-3, solver="legacy").run(0.02, progress=False)
+again = dda.Simulation(scene, dt=1e-3, solver="legacy").run(0.02, progress=False)
+print(first.stats.kernel_time, first.profile().wall, again.stats.kernel_time)
+print(first.profile())
+"""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          cwd=root, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    first, wall, again = (float(v) for v in out.splitlines()[0].split())
+    assert 0.0 < first, out
+    assert again == 0.0, out
+    assert "numba compiled its kernels or loaded them" in out, out
