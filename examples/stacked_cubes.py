@@ -32,8 +32,9 @@ and it is the least well-resolved motion in DDA:
 
 The stack rocks to peaks of about 6.6-9.3 degrees at 3 Hz and 2.6-3.9 degrees at 5 Hz in
 the first second of shaking (without the dashpot 7-9.1 and 2.7-3.9, with 4 s, 6 s or 15 s of
-shaking alike), then on at about 3-6 and 2 degrees while the table shakes. It never reaches the 18.4 degrees it needs to tip, so the three runs the test saw topple (3 Hz
-500 and 700 gal, 5 Hz 700 gal) end here as "moved". At 3 Hz and 400 gal this model rocks by
+shaking alike), then on at about 3-6 and 2 degrees while the table shakes. It never
+reaches the 18.4 degrees it needs to tip, so the three runs the test saw topple (3 Hz 500 and
+700 gal, 5 Hz 700 gal) end here as "moved". At 3 Hz and 400 gal this model rocks by
 6.6 degrees, where the test saw the stack stand still. A rigid stack starts to rock at 327
 gal, so the real one had some resistance the model lacks: imperfect contact faces, or a
 gentler start of the shaking.
