@@ -48,6 +48,13 @@ def test_grid_rejects_a_bare_value():
         grid(MovingBase(), dt=1e-3)
 
 
+def test_grid_names_a_setting_the_study_does_not_take():
+    # (a misspelt axis used to fail only in the sweep's runs, as a TypeError from prepare)
+    with pytest.raises(TypeError, match="MovingBase has no setting 'solvr'; its settings: "
+                                        "solver, dt, penalty"):
+        grid(MovingBase(), solvr=["legacy"], dt=[1e-3])
+
+
 def test_unknown_solver_is_named():
     with pytest.raises(ValueError, match="unknown solver 'implicit'"):
         run_case(Case(MovingBase(duration=0.2), {"solver": "implicit"}))

@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import csv
+import inspect
 import itertools
 import math
 import os
@@ -107,12 +108,30 @@ def grid(study: Study, **axes: Sequence) -> list[Case]:
     """
     if not axes:
         return [Case(study, {})]
+    known = _settings_of(study)
+    unknown = [name for name in axes if known is not None and name not in known]
+    if unknown:
+        raise TypeError(f"grid: {type(study).__name__} has no setting "
+                        f"{', '.join(map(repr, unknown))}; its settings: "
+                        f"{', '.join(known) or 'none'}")
     for name, values in axes.items():
         if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
             raise TypeError(f"grid: axis {name!r} must be a list of values, got {values!r}")
     names = list(axes)
     return [Case(study, dict(zip(names, combo, strict=True)))
             for combo in itertools.product(*(list(axes[n]) for n in names))]
+
+
+def _settings_of(study) -> list[str] | None:
+    """The names ``study.prepare`` takes, or None when it takes any (``**settings``)."""
+    try:
+        params = inspect.signature(study.prepare).parameters.values()
+    except (TypeError, ValueError):
+        return None
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params):
+        return None
+    return [p.name for p in params
+            if p.kind in (inspect.Parameter.POSITIONAL_OR_KEYWORD, inspect.Parameter.KEYWORD_ONLY)]
 
 
 def _cpu_clock():
