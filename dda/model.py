@@ -285,6 +285,15 @@ class Model:
         vel[~self.free] = 0.0
         return vel
 
+    def initial_speeds(self) -> np.ndarray:
+        """(n_blocks,) each free block's speed at the start plus its spin's speed at its
+        farthest vertex from its centroid (m/s; zero for blocks whose motion is known)."""
+        vel = self.initial_velocity()
+        reach = np.hypot(*(self.x_initial - self.centroid_initial[self.topo.block]).T)
+        farthest = np.zeros(self.n_blocks)
+        np.maximum.at(farthest, self.topo.block, reach)
+        return np.hypot(vel[:, 0], vel[:, 1]) + np.abs(vel[:, 2]) * farthest
+
     # ------------------------------------------------------------------ per step
     def known_motion(self, t1: float, known_u: np.ndarray, shaking: tuple):
         """Known translation at ``t1`` and velocity of every block whose motion is given.

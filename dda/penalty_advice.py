@@ -161,6 +161,20 @@ class PenaltyAdvisor:
                 and self.model.free.any()):
             self._check_stiff(steps, contact_cuts, state.time / max(steps, 1))
 
+    def soft_advice(self, state) -> str | None:
+        """:func:`soft_penalty_advice` for the closed contacts of ``state`` (None when no
+        spring sinks ``SOFT_DEPTH`` of its thinner block's half-width), warned or not."""
+        model, c = self.model, state.contacts
+        if not len(c.t_n):
+            return None
+        closed, depth, pn = model.spring_depths(c)
+        if len(closed) == 0:
+            return None
+        half = np.minimum(model.thickness[c.bj[closed]], model.thickness[c.bk[closed]])
+        names = [f"{model.block_label(j)} on {model.block_label(k)}"
+                 for j, k in zip(c.bj[closed], c.bk[closed], strict=True)]
+        return soft_penalty_advice(depth, half, pn, names)
+
     def _check_soft(self, c):
         model = self.model
         # no spring can sink SOFT_DEPTH of a block's half-width when the largest normal force

@@ -196,7 +196,9 @@ class Simulation:
         if auto_dt or self.model.joints.auto:
             choice = choose(self.model, solver, self.dt,
                             shakes=[s.history for s in scene.shakes],
-                            auto_penalty=self.model.joints.auto)
+                            auto_penalty=self.model.joints.auto,
+                            speeds=(self.model.initial_speeds() if analysis == "dynamic"
+                                    else None))
             self.dt = choice.dt
             if self.model.joints.auto:
                 self.model.joints = self.model.joints.with_penalties(choice.normal_penalty,
@@ -418,7 +420,8 @@ class Simulation:
                 continue
             result.stats.cuts.append((self.committed.time, dt, report.reason))
             control.cut(dt, report.reason)
-            control.check_can_go_on(report, tries, dt, self.committed)
+            control.check_can_go_on(report, tries, dt, self.committed,
+                                    lambda: self.advisor.soft_advice(self.committed))
         self.committed = trial
         control.accepted()
         self.advisor.observe(trial, control.steps, control.contact_cuts)

@@ -128,10 +128,14 @@ class StepControl:
         """Whether ``size`` is below the remembered failed size (False when there is none)."""
         return self.ceiling > 0.0 and size < self.ceiling * (1.0 - 1e-9)
 
-    def check_can_go_on(self, report, tries: int, dt: float, committed) -> None:
+    def check_can_go_on(self, report, tries: int, dt: float, committed,
+                        soft_advice=None) -> None:
         """After a cut: raise :class:`dda.SimulationError` when cutting dt further cannot
         help (``tries`` cuts of this step, the last at ``dt``, from the ``committed``
-        state)."""
+        state). ``soft_advice`` (optional, a callable) says whether the committed state's
+        contact springs sink too deep (:meth:`dda.penalty_advice.PenaltyAdvisor.soft_advice`):
+        an untracked penetration beside springs that sink by a large share of a block is the
+        penalty's doing, not detection's."""
         time = committed.time
         before = getattr(self, "tried_untracked", -1.0)  # (a checkpoint from before it)
         self.tried_untracked = report.untracked
@@ -147,14 +151,19 @@ class StepControl:
             # leaves it as deep
             halved = (f", and halving dt left it {report.untracked:.2g} deep ({before:.2g} "
                       "before)" if held else "")
+            soft = soft_advice() if soft_advice is not None else None
+            why = ("contact detection missed it: please report the scene" if soft is None
+                   else f"the penalty is the cause: {soft}")
             raise SimulationError(
                 f"the run cannot go on at t = {time:.6g} s: {report.reason}; it was already "
                 f"{committed.untracked:.2g} tolerances deep, untracked, at the start of "
-                f"the step{halved}, so a smaller dt cannot help (contact detection missed it: "
-                "please report the scene)"
+                f"the step{halved}, so a smaller dt cannot help ({why})"
             )
         if tries > self.max_cuts:
+            soft = (soft_advice() if soft_advice is not None
+                    and report.reason.startswith("untracked penetration") else None)
             raise SimulationError(
                 f"the run cannot go on at t = {time:.6g} s: {report.reason} "
-                f"(step cut {tries} times down to dt = {dt:.3g} s)"
+                f"(step cut {tries} times down to dt = {dt:.3g} s"
+                + ("" if soft is None else f"; the penalty is the likely cause: {soft}") + ")"
             )

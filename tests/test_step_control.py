@@ -296,6 +296,32 @@ def test_an_untracked_penetration_at_a_steps_start_ends_the_run_only_once_a_cut_
                                                 untracked_held=False), k, 0.1, clean)
 
 
+def test_an_untracked_penetration_beside_springs_that_sink_deep_names_the_penalty():
+    """(A hunt's scenes with soft joints stopped on an untracked penetration that blamed
+    contact detection, "please report the scene", where their springs had sunk by up to
+    half a block: the penalty's advice is the reason when the committed springs sink too
+    deep.)"""
+    from types import SimpleNamespace
+
+    from dda.errors import SimulationError
+    from dda.step_control import StepControl
+
+    start = SimpleNamespace(time=1.0, untracked=0.8)
+    report = SimpleNamespace(untracked=1.2, reason="untracked penetration: ...",
+                             untracked_held=False)
+    advice = "contact springs sink too deep: 0.0113 m, 116% of the half-width"
+    with pytest.raises(SimulationError, match="the penalty is the cause: contact springs sink"):
+        StepControl(dt=0.1).check_can_go_on(report, 1, 0.05, start, lambda: advice)
+    with pytest.raises(SimulationError, match="contact detection missed it"):
+        StepControl(dt=0.1).check_can_go_on(report, 1, 0.05, start, lambda: None)
+    deep = SimpleNamespace(untracked=0.1, reason="untracked penetration: ...",
+                           untracked_held=True)
+    with pytest.raises(SimulationError, match=r"cut 14 times .*; the penalty is the likely"):
+        StepControl(dt=0.1).check_can_go_on(deep, 14, 1e-6, SimpleNamespace(time=1.0,
+                                                                             untracked=0.0),
+                                            lambda: advice)
+
+
 @pytest.mark.parametrize("solver", ["legacy", "newton"])
 def test_columns_toppling_in_large_static_steps_are_not_stopped_for_their_linear_gaps(solver):
     """Two 0.5 x 4 m columns toppling on a 35 degree base in a static analysis at 0.22 s a
