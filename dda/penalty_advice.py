@@ -156,7 +156,7 @@ class PenaltyAdvisor:
         """Look at a committed :class:`dda.step.StepState` after ``steps`` steps, of which
         ``contact_cuts`` were cut because the contacts would not settle."""
         if "soft" not in self.warned:
-            self._check_soft(state.contacts)
+            self._check_soft(state)
         if ("stiff" not in self.warned and contact_cuts >= STIFF_CUTS
                 and self.model.free.any()):
             self._check_stiff(steps, contact_cuts, state.time / max(steps, 1))
@@ -171,27 +171,21 @@ class PenaltyAdvisor:
         if len(closed) == 0:
             return None
         half = np.minimum(model.thickness[c.bj[closed]], model.thickness[c.bk[closed]])
+        if not np.any(depth > SOFT_DEPTH * half):
+            return None
         names = [f"{model.block_label(j)} on {model.block_label(k)}"
                  for j, k in zip(c.bj[closed], c.bk[closed], strict=True)]
         return soft_penalty_advice(depth, half, pn, names)
 
-    def _check_soft(self, c):
-        model = self.model
+    def _check_soft(self, state):
+        model, c = self.model, state.contacts
         # no spring can sink SOFT_DEPTH of a block's half-width when the largest normal force
         # would not sink it so on the softest joint and the thinnest block (a test of two
-        # array reductions: the full check below costs ten times more, every step)
+        # array reductions: the full check costs ten times more, every step)
         if not len(c.t_n) or (-float(c.t_n.min()) <= SOFT_DEPTH * model.min_thickness
                               * float(model.joints.normal_penalty.min())):
             return
-        closed, depth, pn = model.spring_depths(c)
-        if len(closed) == 0:
-            return
-        half = np.minimum(model.thickness[c.bj[closed]], model.thickness[c.bk[closed]])
-        if not np.any(depth > SOFT_DEPTH * half):
-            return
-        names = [f"{model.block_label(j)} on {model.block_label(k)}"
-                 for j, k in zip(c.bj[closed], c.bk[closed], strict=True)]
-        message = soft_penalty_advice(depth, half, pn, names)
+        message = self.soft_advice(state)
         if message:
             self.warned.add("soft")
             warnings.warn(message, PenaltyWarning, stacklevel=6)
