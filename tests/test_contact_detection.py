@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from dda.contact.detection import (
+    CandidateContacts,
     VertexTopology,
     bounding_boxes,
     broad_phase,
@@ -245,11 +246,13 @@ def test_a_sunk_corner_keeps_the_face_it_is_held_by_against_a_side_as_deep():
     """The cut slope (Newton, automatic penalty, t = 0.33 s): a block's corner under another
     block's face, at the corner of that face, 0.888 mm behind the face and 0.875 mm behind
     the side (the two blocks' sides on one joint), deeper than the pair's sunk depth
-    (0.863 mm). The narrow phase holds a sunk vertex by the edge it is least deep behind:
+    (0.863 mm). The narrow phase held a sunk vertex by the edge it is least deep behind:
     the side, whose spring cannot hold the face; the contact flipped between face and side on
-    round-off and the face sank in (the guard stopped the run 4.8 mm deep at 1.93 s). A
-    closed contact keeps its edge unless the new one is shallower by more than the sunk
-    depth."""
+    round-off and the face sank in (the guard stopped the run 4.8 mm deep at 1.93 s). It now
+    takes the face: the corner's own top edge runs under the face the whole face long, so a
+    spring on the side would have to push the block a metre to clear it
+    (``_fan_overlap``). And a closed contact keeps its edge unless the new one is shallower
+    by more than the sunk depth."""
     lower = box(0.0, 0.0, 1.0, 1.0)
     upper = box(-0.875e-3, 1.0 - 0.888e-3, 1.0, 1.0)
     x, offsets = stack(lower, upper)
@@ -261,24 +264,24 @@ def test_a_sunk_corner_keeps_the_face_it_is_held_by_against_a_side_as_deep():
     side = int(topo.prv[bottom])  # ... and the edge that ends there: its left side
     d0, limit, sunk = 1e-4, 0.01, 0.863e-3
     cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
-    mine = cand.bk == 1
-    assert list(cand.edge[(cand.vertex == corner) & mine]) == [side]
+    mine = (cand.vertex == corner) & (cand.bk == 1)
+    assert list(cand.edge[mine]) == [bottom]
+    assert cand.geometry.gap[mine][0] == pytest.approx(-0.888e-3, rel=1e-6)
+    # a closed contact on the face against a side found instead (the narrow phase of before)
     closed_v, closed_e = np.array([corner]), np.array([bottom])
-    kept = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, sunk)
+    on_side = CandidateContacts(np.array([corner]), np.array([side]), np.array([0]),
+                                np.array([1]))
+    kept = keep_closed(on_side, closed_v, closed_e, x, topo, d0, limit, 2, sunk)
     assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [bottom]
-    assert kept.geometry.gap[(kept.vertex == corner) & (kept.bk == 1)][0] == pytest.approx(
-        -0.888e-3, rel=1e-6)
-    # without the hysteresis (sunk depth 0) it moves on to the side, as before
-    moved = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, 0.0)
+    # without the hysteresis (sunk depth 0) it moves on to the side
+    moved = keep_closed(on_side, closed_v, closed_e, x, topo, d0, limit, 2, 0.0)
     assert list(moved.edge[(moved.vertex == corner) & (moved.bk == 1)]) == [side]
-    # a side shallower by more than the sunk depth would take it (a block rotating round a
-    # corner deep inside it), but the lower block's side crosses the upper's bottom, not its
-    # side: the overlap (2 mm over the whole face) is the bottom's to hold, which keeps it
+    # 2 mm under the face, 0.875 mm behind the side: still the face
     upper = box(-0.875e-3, 1.0 - 2.0e-3, 1.0, 1.0)
     x, offsets = stack(lower, upper)
     cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
-    assert list(cand.edge[(cand.vertex == corner) & (cand.bk == 1)]) == [side]
-    kept = keep_closed(cand, closed_v, closed_e, x, topo, d0, limit, 2, sunk)
+    assert list(cand.edge[(cand.vertex == corner) & (cand.bk == 1)]) == [bottom]
+    kept = keep_closed(on_side, closed_v, closed_e, x, topo, d0, limit, 2, sunk)
     assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [bottom]
     # held by the side instead, 4 mm deep behind it and 2 mm behind the bottom, which its
     # own side crosses: it moves on to the bottom
@@ -293,10 +296,12 @@ def test_a_sunk_corner_keeps_the_face_it_is_held_by_against_a_side_as_deep():
 def test_a_sunk_corner_pressed_into_a_side_keeps_it_where_it_is_shallower_under_the_bottom():
     """The L on a step of tests/stability (E/1e4, dt 1e-3, restitution 0): the step's corner
     at the floor's level, pressed 2.3 mm into the L's leg through its side, sits 1.8 mm under
-    the leg's bottom as the L sinks into the floor. The narrow phase takes the bottom, the
-    shallower by more than the sunk depth; the step's own bottom edge crosses the leg's side
-    and neither of its edges the leg's bottom, so the closed contact keeps the side (moved to
-    the bottom, the side crossed the step 3.3 mm deep untracked)."""
+    the leg's bottom as the L sinks into the floor. The narrow phase took the bottom, the
+    shallower by more than the sunk depth, and the side crossed the step 3.3 mm deep
+    untracked. It now takes the side: the step's own side runs up inside the leg, 30 cm
+    behind the bottom's line (``_fan_overlap``). A closed contact on the side against the
+    bottom found instead keeps the side: the step's own bottom edge crosses the leg's side and
+    neither of its edges the leg's bottom."""
     step = box(0.0, 0.0, 0.3, 0.3)
     leg = box(-0.0977, -1.8e-3, 0.1, 0.3)
     x, offsets = stack(step, leg)
@@ -305,11 +310,41 @@ def test_a_sunk_corner_pressed_into_a_side_keeps_it_where_it_is_shallower_under_
     bottom, side = 4, 5  # the leg's edges from its lower left and lower right corners
     d0, limit, sunk = 1e-4, 0.01, 0.22e-3
     cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
-    assert list(cand.edge[(cand.vertex == corner) & (cand.bk == 1)]) == [bottom]
-    kept = keep_closed(cand, np.array([corner]), np.array([side]), x, topo, d0, limit, 2, sunk)
-    held = (kept.vertex == corner) & (kept.bk == 1)
-    assert list(kept.edge[held]) == [side]
-    assert kept.geometry.gap[held][0] == pytest.approx(-2.3e-3, rel=1e-6)
+    held = (cand.vertex == corner) & (cand.bk == 1)
+    assert list(cand.edge[held]) == [side]
+    assert cand.geometry.gap[held][0] == pytest.approx(-2.3e-3, rel=1e-6)
+    on_bottom = CandidateContacts(np.array([corner]), np.array([bottom]), np.array([0]),
+                                  np.array([1]))
+    kept = keep_closed(on_bottom, np.array([corner]), np.array([side]), x, topo, d0, limit, 2,
+                       sunk)
+    assert list(kept.edge[(kept.vertex == corner) & (kept.bk == 1)]) == [side]
+
+
+def test_two_corners_that_hit_tip_to_tip_and_crossed_are_held_along_the_overlap():
+    """tests/stability's corner-on-corner impact (E/1e4, legacy, restitution 0) at t = 0.209 s
+    as the narrow phase of before left it: the box's corner had slid past the anvil's tip and
+    was held 1.46 mm behind the anvil's left face, the tip 0.35 mm behind the box's side,
+    while the box's bottom edge lay inside the anvil under its right face, 6.4 mm deep at the
+    corner (7.9e-5 m2 of overlap, untracked). The overlap along each of the anvil's and the
+    box's normals (the separating axis test) is least along the right face's: the corner is
+    held there, as deep as the overlap."""
+    anvil = [(0.0, -0.5), (0.21213, -0.28787), (0.0, -0.07574), (-0.21213, -0.28787)]
+    box_ = [(-0.00353, -0.08133), (0.25824, -0.22787), (0.40478, 0.0339), (0.14301, 0.18045)]
+    x, offsets = stack(anvil, box_)
+    topo = VertexTopology.from_offsets(offsets)
+    cand = narrow_phase(x, topo, 1e-4, 0.02, sunk_depth=0.375e-3)
+    held = (cand.vertex == 4) & (cand.bk == 0)
+    assert list(cand.edge[held]) == [1]  # the anvil's right face, not its left (2)
+
+    def axis_overlap(n):
+        a, b = np.asarray(anvil) @ n, np.asarray(box_) @ n
+        return min(a.max(), b.max()) - max(a.min(), b.min())
+
+    normals = [np.array([d[1], -d[0]]) / np.hypot(*d) for p in (anvil, box_)
+               for d in np.roll(np.asarray(p), -1, axis=0) - np.asarray(p)]
+    least = min(axis_overlap(n) for n in normals)
+    assert -cand.geometry.gap[held][0] == pytest.approx(least, rel=1e-9)
+    assert least > 6e-3
 
 
 def test_a_vertex_vertex_pair_across_another_joint_is_no_mirror():

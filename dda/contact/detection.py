@@ -18,18 +18,23 @@ A vertex-edge pair is a contact candidate when
 3. the gap lies in ``[-penetration_limit, search_distance]``, and a negative gap (the vertex
    behind the edge's line) counts only when the vertex is inside the edge's block, no deeper
    behind the line than it is inside the block (its distance to the block's boundary) plus
-   ``sunk_depth``;
+   ``sunk_depth`` (a vertex sunk into the block deeper than ``sunk_depth`` is exempt);
 4. the vertex is locally the first point of its block to cross the edge's line: both of its
    edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG`` (a
-   vertex sunk into the block deeper than ``sunk_depth`` is exempt: the nearest edge holds
-   it).
+   sunk vertex is exempt: the edge along which the two blocks overlap least near it holds
+   it, see below).
 Of several edges of one block that pass for the same vertex, the nearest are preferred (the
 distance from the vertex to the edge as a segment: round a convex corner of a concave block,
 the top of a step's riser, the line of the tread below lies beyond a corner resting on the
 tread above, and only the riser leads there), of those the one with the largest gap (the least
 deep: at a corner where four blocks meet, a vertex sliding along one joint past the corner must
 not be taken as deep behind the other joint's line), then one whose foot lies on the edge, then
-the one whose outward normal is most opposed to the vertex's outward bisector. For a convex
+the one whose outward normal is most opposed to the vertex's outward bisector. For a sunk
+vertex "nearest" means the least overlap along the edge's normal, seen from the vertex
+(:func:`_fan_overlap`: how deep behind the edge's line the vertex and the stretches of its
+own two edges inside the block reach, a separating axis test local to the vertex): its
+nearest edge can be the wrong one, as for two corners that hit tip to tip and slid past each
+other, each nearest the other's side while the overlap runs under the other's face. For a convex
 block the nearest edge is the least deep one (outside it the feet of two edges never both lie
 on their edges, and in a corner's wedge the two are equally near). At a reflex (concave) vertex
 of the block the solid is the union of the two edges' half-planes, and a vertex in the corner
@@ -557,10 +562,11 @@ def narrow_phase(
     penetration_limit : deepest penetration at which a pair is still recognised
     pairs : block pairs of the broad phase (computed here when None)
     sunk_depth : a vertex inside the other block deeper than this (its distance to that
-        block's boundary) is sunk: the entrance test no longer judges its edges (the nearest
-        holds it), and of a vertex-vertex case's two mirrored pairs the sunk one is kept too
-        (two corners sunk into each other: one spring holds one corner, and the other,
-        sliding round it, would go on sinking untracked). Near a corner a shallow vertex is
+        block's boundary) is sunk: the entrance test no longer judges its edges (the one
+        along which the blocks overlap least holds it), and of a vertex-vertex case's two
+        mirrored pairs the sunk one is kept too (two corners sunk into each other: one
+        spring holds one corner, and the other, sliding round it, would go on sinking
+        untracked). Near a corner a shallow vertex is
         nearer the side than the face it came through, so this must stay well above
         round-off and elastic strain: the simulation passes a quarter of the guard's
         tolerance. Infinite (the default) turns both off. A (n_blocks,) array gives each
@@ -742,6 +748,7 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
     s_neg = np.empty(most)
     s_dist = np.empty(most)
     s_least = np.empty(most, dtype=np.bool_)
+    s_near = np.empty(most, dtype=np.bool_)
     s_order = np.empty(most, dtype=np.int64)
     gap_tie = 1e-9
     xi_tol = 1e-9
@@ -782,6 +789,7 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                     on_edge = xi >= -xi_tol and xi <= 1.0 + xi_tol
                     reach = search_distance
                     sunk = False
+                    near = True  # no deeper behind the line than inside the block
                     if gap < -gap_tie * length:
                         # behind the edge's line: only a vertex inside the block, and no
                         # deeper behind the line than inside the block (plus sunk_depth)
@@ -795,7 +803,9 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                         if not inside and not depth <= gap_tie * length:
                             continue
                         if -gap > depth + sunk_depth:
-                            continue
+                            if not sunk:
+                                continue
+                            near = False
                     dist = abs(gap)  # from the vertex to the edge (the segment)
                     if not on_edge:
                         if xi < 0.5:
@@ -805,6 +815,10 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                         dist = np.hypot(px - ex, py - ey)
                         if not dist <= reach:
                             continue
+                    if sunk:
+                        # a sunk vertex: the edge whose spring clears the least overlap
+                        # (:func:`_fan_overlap`) counts as the nearest
+                        dist = max(dist, _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv))
                     if not sunk:
                         entering = True
                         for nb in (prv[v], nxt[v]):
@@ -821,6 +835,7 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                     s_sunk[n_s] = sunk
                     s_neg[n_s] = (0.0 + nx * bisector[v, 0]) + ny * bisector[v, 1]
                     s_dist[n_s] = dist
+                    s_near[n_s] = near
                     n_s += 1
                 if n_s == 0:
                     continue
@@ -853,8 +868,8 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                 for t in range(n_s):
                     i = s_order[t]
                     e = s_edge[i]
-                    if t == 0 or (e == nxt[chosen] and reflex[nxt[chosen]]) or (
-                            e == prv[chosen] and reflex[chosen]):
+                    if t == 0 or s_near[i] and (e == nxt[chosen] and reflex[nxt[chosen]] or
+                                                e == prv[chosen] and reflex[chosen]):
                         out_v[n_out] = v
                         out_e[n_out] = e
                         out_k[n_out] = k
@@ -984,6 +999,43 @@ def _point_in_block(qx, qy, k, x, offsets, nxt):
             depth = dist
             near = e
     return inside, depth, near
+
+
+@njit(cache=True)
+def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
+    """How deep behind an edge's line (outward normal (nx, ny); the vertex ``gap`` from it,
+    negative behind) the part of vertex v's block near v that lies inside block k reaches:
+    the larger of ``-gap`` and, for each edge at v that heads behind the line, the depth of
+    the point where it leaves k (its other end when it does not).
+
+    It is how far the edge's spring must push v's block out along (nx, ny) to clear k
+    there: the overlap of the two blocks along that normal, seen from v (the separating
+    axis test, local to v's two edges). For a corner sunk into a block's corner the nearest
+    edge can be the wrong one: two corners that hit each other tip to tip and slid past
+    each other are each nearest the other's side, while the overlap runs along the side's
+    other edge, whose spring alone pushes them apart.
+    """
+    px, py = x[v, 0], x[v, 1]
+    over = -gap
+    for nb in (prv[v], nxt[v]):
+        ax, ay = x[nb, 0] - px, x[nb, 1] - py
+        a_n = (0.0 + ax * nx) + ay * ny
+        if a_n >= 0.0:
+            continue
+        t_exit = 1.0
+        for e in range(offsets[k], offsets[k + 1]):
+            f = nxt[e]
+            ex, ey = x[f, 0] - x[e, 0], x[f, 1] - x[e, 1]
+            den = ax * ey - ay * ex
+            if den == 0.0:
+                continue
+            qx, qy = x[e, 0] - px, x[e, 1] - py
+            t = (qx * ey - qy * ex) / den
+            u = (qx * ay - qy * ax) / den
+            if t > 1e-12 and t < t_exit and u >= 0.0 and u <= 1.0:
+                t_exit = t
+        over = max(over, -gap - t_exit * a_n)
+    return over
 
 
 @njit(cache=True)
