@@ -1039,6 +1039,70 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
 
 
 @njit(cache=True)
+def _deepest_stretch(v, w, k, x, offsets, nxt, depth, near, min_depth):
+    """For an edge v -> w whose midpoint is outside block k (at ``depth`` from it, ``near``
+    its nearest edge): of the middles of the edge's stretches between its crossings with
+    k's boundary, the deepest inside k, as ``(True, depth, near)``, or the midpoint's
+    ``(False, depth, near)`` when none is inside.
+
+    An edge that crosses into k and out again between its ends can lie inside k over a
+    stretch that neither its ends nor its midpoint reach (two blocks whose corners passed
+    each other, a bar across another); the middle of that stretch is where it lies deepest
+    for a convex k. A stretch no longer than ``2 min_depth`` is skipped: its ends are on
+    k's boundary, so nothing of it is deeper than half its length."""
+    ax, ay = x[v, 0], x[v, 1]
+    dx, dy = x[w, 0] - ax, x[w, 1] - ay
+    m = offsets[k + 1] - offsets[k]
+    cuts = np.empty(m)
+    enters = np.empty(m, dtype=np.bool_)
+    n = 0
+    for e in range(offsets[k], offsets[k + 1]):
+        f = nxt[e]
+        ex, ey = x[f, 0] - x[e, 0], x[f, 1] - x[e, 1]
+        den = dx * ey - dy * ex
+        if den == 0.0:
+            continue
+        qx, qy = x[e, 0] - ax, x[e, 1] - ay
+        t = (qx * ey - qy * ex) / den
+        u = (qx * dy - qy * dx) / den
+        if 0.0 < t < 1.0 and 0.0 <= u <= 1.0:
+            cuts[n] = t
+            enters[n] = den < 0.0  # into k: to the left of its CCW edge
+            n += 1
+    inside = False
+    if n == 0:
+        return inside, depth, near
+    order = np.argsort(cuts[:n])
+    length = np.hypot(dx, dy)
+    for i in range(n + 1):
+        # the stretch from crossing i - 1 (the edge's start for i = 0) to crossing i (its
+        # end for i = n): inside k when it starts by entering or ends by leaving
+        t0 = 0.0 if i == 0 else cuts[order[i - 1]]
+        t1 = 1.0 if i == n else cuts[order[i]]
+        if not ((i > 0 and enters[order[i - 1]]) or (i < n and not enters[order[i]])):
+            continue
+        if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length):
+            continue
+        t = 0.5 * (t0 + t1)
+        ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
+        if ins and (not inside or dep > depth):
+            inside, depth, near = True, dep, ne
+    return inside, depth, near
+    cuts[n] = 1.0
+    n += 1
+    cuts[:n].sort()
+    length = np.hypot(dx, dy)
+    for i in range(n - 1):
+        if (cuts[i + 1] - cuts[i]) * length <= max(2.0 * min_depth, 1e-12 * length):
+            continue
+        t = 0.5 * (cuts[i] + cuts[i + 1])
+        ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
+        if ins and (not inside or dep > depth):
+            inside, depth, near = True, dep, ne
+    return inside, depth, near
+
+
+@njit(cache=True)
 def _inside_depth_kernel(p, kblock, x, offsets, nxt):
     """:func:`inside_depth` of every point p[i] and block kblock[i]."""
     n = p.shape[0]
@@ -1057,8 +1121,10 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
     block deeper than ``min_depth``: vertex, block, depth and nearest edge, the pairs in the
     order (j, k) first, then (k, j) (the guard's :func:`vertex_penetrations`; kept in this
     file with :func:`_point_in_block`, whose cache it shares). With ``midpoints`` the point of
-    vertex v is the midpoint of its edge to ``nxt[v]``, every edge's (``corner`` unused; the
-    guard's :func:`dda.contact.penetration.edge_penetrations`)."""
+    vertex v is the midpoint of its edge to ``nxt[v]``, every edge's, or where that is outside
+    and the edge crosses in and out of the block, the deepest middle of a stretch inside
+    (:func:`_deepest_stretch`) (``corner`` unused; the guard's
+    :func:`dda.contact.penetration.edge_penetrations`)."""
     n_pairs = pairs.shape[0]
     cap = 0
     for q in range(n_pairs):
@@ -1077,14 +1143,25 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
             for v in range(offsets[j], offsets[j + 1]):
                 if midpoints:
                     w = nxt[v]
+                    if not (max(x[v, 0], x[w, 0]) >= xmin and min(x[v, 0], x[w, 0]) <= xmax
+                            and max(x[v, 1], x[w, 1]) >= ymin
+                            and min(x[v, 1], x[w, 1]) <= ymax):
+                        continue
                     px, py = 0.5 * (x[v, 0] + x[w, 0]), 0.5 * (x[v, 1] + x[w, 1])
+                    if px >= xmin and px <= xmax and py >= ymin and py <= ymax:
+                        inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
+                    else:
+                        inside, depth, near = False, np.inf, -1
+                    if not inside:
+                        inside, depth, near = _deepest_stretch(v, w, k, x, offsets, nxt,
+                                                               depth, near, min_depth)
                 else:
                     px, py = x[v, 0], x[v, 1]
-                if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
-                    continue
-                if not (midpoints or corner[v]):
-                    continue
-                inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
+                    if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
+                        continue
+                    if not corner[v]:
+                        continue
+                    inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
                 if inside and depth > min_depth:
                     out_v[n_out] = v
                     out_k[n_out] = k
