@@ -1002,6 +1002,31 @@ def _point_in_block(qx, qy, k, x, offsets, nxt):
 
 
 @njit(cache=True)
+def _crossings(ax, ay, dx, dy, k, x, offsets, nxt):
+    """Where the segment from (ax, ay) along (dx, dy) crosses block k's edges strictly
+    between its ends: the parameters t in (0, 1) and whether it enters k there (crosses a
+    CCW edge from its right to its left), in k's edge order."""
+    m = offsets[k + 1] - offsets[k]
+    cuts = np.empty(m)
+    enters = np.empty(m, dtype=np.bool_)
+    n = 0
+    for e in range(offsets[k], offsets[k + 1]):
+        f = nxt[e]
+        ex, ey = x[f, 0] - x[e, 0], x[f, 1] - x[e, 1]
+        den = dx * ey - dy * ex
+        if den == 0.0:
+            continue
+        qx, qy = x[e, 0] - ax, x[e, 1] - ay
+        t = (qx * ey - qy * ex) / den
+        u = (qx * dy - qy * dx) / den
+        if 0.0 < t < 1.0 and 0.0 <= u <= 1.0:
+            cuts[n] = t
+            enters[n] = den < 0.0
+            n += 1
+    return cuts[:n], enters[:n]
+
+
+@njit(cache=True)
 def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
     """How deep behind an edge's line (outward normal (nx, ny); the vertex ``gap`` from it,
     negative behind) the part of vertex v's block near v that lies inside block k reaches:
@@ -1023,16 +1048,9 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
         if a_n >= 0.0:
             continue
         t_exit = 1.0
-        for e in range(offsets[k], offsets[k + 1]):
-            f = nxt[e]
-            ex, ey = x[f, 0] - x[e, 0], x[f, 1] - x[e, 1]
-            den = ax * ey - ay * ex
-            if den == 0.0:
-                continue
-            qx, qy = x[e, 0] - px, x[e, 1] - py
-            t = (qx * ey - qy * ex) / den
-            u = (qx * ay - qy * ax) / den
-            if t > 1e-12 and t < t_exit and u >= 0.0 and u <= 1.0:
+        cuts, _ = _crossings(px, py, ax, ay, k, x, offsets, nxt)
+        for t in cuts:
+            if t > 1e-12 and t < t_exit:
                 t_exit = t
         over = max(over, -gap - t_exit * a_n)
     return over
@@ -1052,23 +1070,8 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, depth, near, min_depth):
     k's boundary, so nothing of it is deeper than half its length."""
     ax, ay = x[v, 0], x[v, 1]
     dx, dy = x[w, 0] - ax, x[w, 1] - ay
-    m = offsets[k + 1] - offsets[k]
-    cuts = np.empty(m)
-    enters = np.empty(m, dtype=np.bool_)
-    n = 0
-    for e in range(offsets[k], offsets[k + 1]):
-        f = nxt[e]
-        ex, ey = x[f, 0] - x[e, 0], x[f, 1] - x[e, 1]
-        den = dx * ey - dy * ex
-        if den == 0.0:
-            continue
-        qx, qy = x[e, 0] - ax, x[e, 1] - ay
-        t = (qx * ey - qy * ex) / den
-        u = (qx * dy - qy * dx) / den
-        if 0.0 < t < 1.0 and 0.0 <= u <= 1.0:
-            cuts[n] = t
-            enters[n] = den < 0.0  # into k: to the left of its CCW edge
-            n += 1
+    cuts, enters = _crossings(ax, ay, dx, dy, k, x, offsets, nxt)
+    n = cuts.shape[0]
     inside = False
     if n == 0:
         return inside, depth, near
@@ -1084,18 +1087,6 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, depth, near, min_depth):
         if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length):
             continue
         t = 0.5 * (t0 + t1)
-        ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
-        if ins and (not inside or dep > depth):
-            inside, depth, near = True, dep, ne
-    return inside, depth, near
-    cuts[n] = 1.0
-    n += 1
-    cuts[:n].sort()
-    length = np.hypot(dx, dy)
-    for i in range(n - 1):
-        if (cuts[i + 1] - cuts[i]) * length <= max(2.0 * min_depth, 1e-12 * length):
-            continue
-        t = 0.5 * (cuts[i] + cuts[i + 1])
         ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
         if ins and (not inside or dep > depth):
             inside, depth, near = True, dep, ne
