@@ -61,6 +61,29 @@ def test_vertex_penetrations_match_shapely(blocks):
         assert found[key] == pytest.approx(expected[key], rel=1e-9, abs=1e-12)
 
 
+
+@settings(max_examples=80, deadline=None, derandomize=True)
+@given(st.lists(st.tuples(st.floats(0, 3), st.floats(0, 3),
+                          st.lists(st.floats(0.3, 1.0), min_size=3, max_size=9),
+                          st.floats(0, 6.3)), min_size=2, max_size=5),
+       st.floats(0.0, 0.3))
+def test_edge_probes_deeper_than_a_depth_are_those_of_all_probes_deeper_than_it(blocks,
+                                                                                 least):
+    """The edge probe skips an edge outside the other block's box shrunk by ``min_depth``
+    (nothing of a block deeper than that lies outside it): with ``min_depth`` it finds
+    exactly the probes deeper than it of a search without."""
+    from dda.contact.penetration import edge_penetrations
+
+    x, topo = stack([star(cx, cy, r, t) for cx, cy, r, t in blocks])
+    every = edge_penetrations(x, topo)
+    deep = edge_penetrations(x, topo, min_depth=least)
+    keep = every.depth > least
+    assert sorted(zip(deep.vertex.tolist(), deep.block.tolist(), deep.depth.tolist(),
+                      strict=True)) == sorted(zip(every.vertex[keep].tolist(),
+                                                  every.block[keep].tolist(),
+                                                  every.depth[keep].tolist(), strict=True))
+
+
 def test_a_vertex_in_a_notch_is_inside_the_non_convex_block():
     # a U-shaped block and a small box whose right side is in the U's right arm, 0.05 deep
     u = [(0, 0), (3, 0), (3, 2), (2, 2), (2, 1), (1, 1), (1, 2), (0, 2)]

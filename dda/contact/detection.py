@@ -1057,11 +1057,10 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
 
 
 @njit(cache=True)
-def _deepest_stretch(v, w, k, x, offsets, nxt, depth, near, min_depth):
-    """For an edge v -> w whose midpoint is outside block k (at ``depth`` from it, ``near``
-    its nearest edge): of the middles of the edge's stretches between its crossings with
-    k's boundary, the deepest inside k, as ``(True, depth, near)``, or the midpoint's
-    ``(False, depth, near)`` when none is inside.
+def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth):
+    """The deepest inside block k of edge v -> w's midpoint (``inside`` k at ``depth``,
+    ``near`` its nearest edge, as :func:`_point_in_block` gives them) and the middles of the
+    edge's stretches between its crossings with k's boundary, as ``(inside, depth, near)``.
 
     An edge that crosses into k and out again between its ends can lie inside k over a
     stretch that neither its ends nor its midpoint reach (two blocks whose corners passed
@@ -1072,7 +1071,6 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, depth, near, min_depth):
     dx, dy = x[w, 0] - ax, x[w, 1] - ay
     cuts, enters = _crossings(ax, ay, dx, dy, k, x, offsets, nxt)
     n = cuts.shape[0]
-    inside = False
     if n == 0:
         return inside, depth, near
     order = np.argsort(cuts[:n])
@@ -1131,21 +1129,25 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
             j = pairs[q, s]
             k = pairs[q, 1 - s]
             xmin, ymin, xmax, ymax = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
+            sxmin, symin = xmin + min_depth, ymin + min_depth
+            sxmax, symax = xmax - min_depth, ymax - min_depth
             for v in range(offsets[j], offsets[j + 1]):
                 if midpoints:
+                    # a point of k deeper than min_depth lies in k's box shrunk by it (a ray
+                    # from it along an axis leaves k within the box): nothing of an edge
+                    # outside that box can be deeper
                     w = nxt[v]
-                    if not (max(x[v, 0], x[w, 0]) >= xmin and min(x[v, 0], x[w, 0]) <= xmax
-                            and max(x[v, 1], x[w, 1]) >= ymin
-                            and min(x[v, 1], x[w, 1]) <= ymax):
+                    if not (max(x[v, 0], x[w, 0]) >= sxmin and min(x[v, 0], x[w, 0]) <= sxmax
+                            and max(x[v, 1], x[w, 1]) >= symin
+                            and min(x[v, 1], x[w, 1]) <= symax):
                         continue
                     px, py = 0.5 * (x[v, 0] + x[w, 0]), 0.5 * (x[v, 1] + x[w, 1])
-                    if px >= xmin and px <= xmax and py >= ymin and py <= ymax:
+                    if px >= sxmin and px <= sxmax and py >= symin and py <= symax:
                         inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
                     else:
                         inside, depth, near = False, np.inf, -1
-                    if not inside:
-                        inside, depth, near = _deepest_stretch(v, w, k, x, offsets, nxt,
-                                                               depth, near, min_depth)
+                    inside, depth, near = _deepest_stretch(v, w, k, x, offsets, nxt, inside,
+                                                           depth, near, min_depth)
                 else:
                     px, py = x[v, 0], x[v, 1]
                     if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
