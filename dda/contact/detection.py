@@ -1002,28 +1002,30 @@ def _point_in_block(qx, qy, k, x, offsets, nxt):
 
 
 @njit(cache=True)
-def _crossings(ax, ay, dx, dy, k, x, offsets, nxt):
+def _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters):
     """Where the segment from (ax, ay) along (dx, dy) crosses block k's edges strictly
     between its ends: the parameters t in (0, 1) and whether it enters k there (crosses a
-    CCW edge from its right to its left), in k's edge order."""
-    m = offsets[k + 1] - offsets[k]
-    cuts = np.empty(m)
-    enters = np.empty(m, dtype=np.bool_)
+    CCW edge from its right to its left), written to ``cuts[:n]`` and ``enters[:n]`` in
+    k's edge order; returns n. The segment's ends must lie strictly on either side of the
+    edge's line, and the edge's ends on either side of the segment's line or on it."""
     n = 0
     for e in range(offsets[k], offsets[k + 1]):
         f = nxt[e]
-        ex, ey = x[f, 0] - x[e, 0], x[f, 1] - x[e, 1]
+        px, py = x[e, 0], x[e, 1]
+        ex, ey = x[f, 0] - px, x[f, 1] - py
+        sa = ex * (ay - py) - ey * (ax - px)  # > 0: the start on k's side of the line
         den = dx * ey - dy * ex
-        if den == 0.0:
+        sb = sa - den  # ... and the end
+        if not ((sa < 0.0 < sb) or (sb < 0.0 < sa)):
             continue
-        qx, qy = x[e, 0] - ax, x[e, 1] - ay
-        t = (qx * ey - qy * ex) / den
-        u = (qx * dy - qy * dx) / den
-        if 0.0 < t < 1.0 and 0.0 <= u <= 1.0:
-            cuts[n] = t
-            enters[n] = den < 0.0
-            n += 1
-    return cuts[:n], enters[:n]
+        sp = dx * (py - ay) - dy * (px - ax)
+        sq = dx * (x[f, 1] - ay) - dy * (x[f, 0] - ax)
+        if (sp > 0.0 and sq > 0.0) or (sp < 0.0 and sq < 0.0):
+            continue
+        cuts[n] = sa / den
+        enters[n] = sa < 0.0
+        n += 1
+    return n
 
 
 @njit(cache=True)
@@ -1048,16 +1050,18 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
         if a_n >= 0.0:
             continue
         t_exit = 1.0
-        cuts, _ = _crossings(px, py, ax, ay, k, x, offsets, nxt)
-        for t in cuts:
-            if t > 1e-12 and t < t_exit:
-                t_exit = t
+        m = offsets[k + 1] - offsets[k]
+        cuts, enters = np.empty(m), np.empty(m, dtype=np.bool_)
+        for i in range(_crossings(px, py, ax, ay, k, x, offsets, nxt, cuts, enters)):
+            if cuts[i] > 1e-12 and cuts[i] < t_exit:
+                t_exit = cuts[i]
         over = max(over, -gap - t_exit * a_n)
     return over
 
 
 @njit(cache=True)
-def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth):
+def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, cuts,
+                     enters, probed):
     """The deepest inside block k of edge v -> w's midpoint (``inside`` k at ``depth``,
     ``near`` its nearest edge, as :func:`_point_in_block` gives them) and the middles of the
     edge's stretches between its crossings with k's boundary, as ``(inside, depth, near)``.
@@ -1066,23 +1070,31 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth):
     stretch that neither its ends nor its midpoint reach (two blocks whose corners passed
     each other, a bar across another); the middle of that stretch is where it lies deepest
     for a convex k. A stretch no longer than ``2 min_depth`` is skipped: its ends are on
-    k's boundary, so nothing of it is deeper than half its length."""
+    k's boundary, so nothing of it is deeper than half its length, nor the stretch through
+    the midpoint when ``probed`` (the midpoint stands for it). ``cuts`` and ``enters``:
+    scratch of at least k's size."""
     ax, ay = x[v, 0], x[v, 1]
     dx, dy = x[w, 0] - ax, x[w, 1] - ay
-    cuts, enters = _crossings(ax, ay, dx, dy, k, x, offsets, nxt)
-    n = cuts.shape[0]
+    n = _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters)
     if n == 0:
         return inside, depth, near
-    order = np.argsort(cuts[:n])
+    for i in range(1, n):  # by t (insertion: a handful)
+        t, en = cuts[i], enters[i]
+        j = i
+        while j > 0 and cuts[j - 1] > t:
+            cuts[j], enters[j] = cuts[j - 1], enters[j - 1]
+            j -= 1
+        cuts[j], enters[j] = t, en
     length = np.hypot(dx, dy)
     for i in range(n + 1):
         # the stretch from crossing i - 1 (the edge's start for i = 0) to crossing i (its
         # end for i = n): inside k when it starts by entering or ends by leaving
-        t0 = 0.0 if i == 0 else cuts[order[i - 1]]
-        t1 = 1.0 if i == n else cuts[order[i]]
-        if not ((i > 0 and enters[order[i - 1]]) or (i < n and not enters[order[i]])):
+        t0 = 0.0 if i == 0 else cuts[i - 1]
+        t1 = 1.0 if i == n else cuts[i]
+        if not ((i > 0 and enters[i - 1]) or (i < n and not enters[i])):
             continue
-        if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length):
+        if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length) or (
+                probed and t0 <= 0.5 <= t1):
             continue
         t = 0.5 * (t0 + t1)
         ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
@@ -1123,6 +1135,11 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
     out_k = np.empty(cap, dtype=np.int64)
     out_d = np.empty(cap)
     out_e = np.empty(cap, dtype=np.int64)
+    most = 0
+    for b in range(offsets.shape[0] - 1):
+        most = max(most, offsets[b + 1] - offsets[b])
+    cuts = np.empty(most)  # _deepest_stretch's scratch
+    enters = np.empty(most, dtype=np.bool_)
     n_out = 0
     for s in range(2):
         for q in range(n_pairs):
@@ -1146,8 +1163,12 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
                         inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
                     else:
                         inside, depth, near = False, np.inf, -1
+                    # the midpoint stands for its stretch where it is in k's box (probed, or
+                    # no deeper than min_depth)
+                    probed = px >= xmin and px <= xmax and py >= ymin and py <= ymax
                     inside, depth, near = _deepest_stretch(v, w, k, x, offsets, nxt, inside,
-                                                           depth, near, min_depth)
+                                                           depth, near, min_depth, cuts,
+                                                           enters, probed)
                 else:
                     px, py = x[v, 0], x[v, 1]
                     if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
