@@ -167,6 +167,15 @@ def _interior_point(p):
     return np.array([0.5 * (xs[2 * k] + xs[2 * k + 1]), level])
 
 
+def _anchor(point, left, right):
+    """A bolt's end in a base that spans ``left`` to ``right``: 0.2 m below the free blocks'
+    floor, straight below ``point``, or 5 cm in from the base's end nearest it when the base
+    does not reach below it (the upper rows of blocks on an incline lean back past its
+    foot)."""
+    x = point[0] if left < point[0] < right else min(max(point[0], left + 0.05), right - 0.05)
+    return np.array([x, -0.2])
+
+
 # ---------------------------------------------------------------- scenes
 def _law(spec):
     if spec["law"] == "coulomb":
@@ -318,10 +327,12 @@ def scene_of(spec) -> dda.Scene:
             scene.shake(base, acceleration=history)
         else:
             scene.prescribe_motion(base, displacement=history)
+    vertices, offsets = scene.vertex_arrays()
+    base_x = vertices[offsets[base.index]:offsets[base.index + 1], 0]
     for bolt in spec.get("bolts", []):  # a: 0 for the base, k for free block k (from 1)
         end_b = _interior_point(polygons[bolt["b"] - 1])
         end_a = (_interior_point(polygons[bolt["a"] - 1]) if bolt["a"] > 0
-                 else np.array([end_b[0], -0.2]))  # in the base, straight below
+                 else _anchor(end_b, base_x.min(), base_x.max()))
         scene.add_bolt(bolt["a"], tuple(end_a), bolt["b"], tuple(end_b), bolt["k"],
                        pretension=bolt["pre"], strength=bolt["strength"])
     return scene
