@@ -819,7 +819,7 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                         # a sunk vertex: the edge whose spring clears the least overlap
                         # (:func:`_fan_overlap`) counts as the nearest
                         dist = max(dist, _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv))
-                    if not sunk:
+                    else:
                         entering = True
                         for nb in (prv[v], nxt[v]):
                             ax, ay = x[nb, 0] - px, x[nb, 1] - py
@@ -1044,14 +1044,14 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
     """
     px, py = x[v, 0], x[v, 1]
     over = -gap
+    m = offsets[k + 1] - offsets[k]
+    cuts, enters = np.empty(m), np.empty(m, dtype=np.bool_)
     for nb in (prv[v], nxt[v]):
         ax, ay = x[nb, 0] - px, x[nb, 1] - py
         a_n = (0.0 + ax * nx) + ay * ny
         if a_n >= 0.0:
             continue
         t_exit = 1.0
-        m = offsets[k + 1] - offsets[k]
-        cuts, enters = np.empty(m), np.empty(m, dtype=np.bool_)
         for i in range(_crossings(px, py, ax, ay, k, x, offsets, nxt, cuts, enters)):
             if cuts[i] > 1e-12 and cuts[i] < t_exit:
                 t_exit = cuts[i]
@@ -1068,8 +1068,8 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
 
     An edge that crosses into k and out again between its ends can lie inside k over a
     stretch that neither its ends nor its midpoint reach (two blocks whose corners passed
-    each other, a bar across another); the middle of that stretch is where it lies deepest
-    for a convex k. A stretch no longer than ``2 min_depth`` is skipped: its ends are on
+    each other, a bar across another); the middle of each stretch inside is probed. A
+    stretch no longer than ``2 min_depth`` is skipped: its ends are on
     k's boundary, so nothing of it is deeper than half its length, nor the stretch through
     the midpoint when ``probed`` (the midpoint stands for it). ``cuts`` and ``enters``:
     scratch of at least k's size."""
@@ -1122,9 +1122,9 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
     block deeper than ``min_depth``: vertex, block, depth and nearest edge, the pairs in the
     order (j, k) first, then (k, j) (the guard's :func:`vertex_penetrations`; kept in this
     file with :func:`_point_in_block`, whose cache it shares). With ``midpoints`` the point of
-    vertex v is the midpoint of its edge to ``nxt[v]``, every edge's, or where that is outside
-    and the edge crosses in and out of the block, the deepest middle of a stretch inside
-    (:func:`_deepest_stretch`) (``corner`` unused; the guard's
+    vertex v is the deepest of its edge's (to ``nxt[v]``, every edge's) midpoint and the
+    middles of the edge's stretches inside the block between its crossings with the block's
+    boundary (:func:`_deepest_stretch`) (``corner`` unused; the guard's
     :func:`dda.contact.penetration.edge_penetrations`)."""
     n_pairs = pairs.shape[0]
     cap = 0

@@ -10,9 +10,9 @@ with "inside" decided by the crossing number of a ray from P (even-odd rule, so 
 blocks are handled exactly). The midpoint of every edge is probed the same way: where blocks
 stand corner on corner, a corner that sinks into the block below does so along that block's
 side-face line, on its boundary, at depth zero, and only the edge between two such corners is
-inside (:func:`edge_penetrations`). An edge whose midpoint is outside but which crosses into
-the other block and out again between its ends (two bars across each other, two corners that
-passed each other) is probed at the middle of each stretch between the crossings. A vertex
+inside (:func:`edge_penetrations`). An edge that crosses into the other block and out again
+between its ends, its midpoint outside (two bars across each other, two corners that passed
+each other), is probed as well at the middle of each stretch between the crossings. A vertex
 inside another block is *tracked* when a closed contact of that vertex (or, for a
 vertex-vertex contact, of the vertex at the end of the contacted edge) against that block
 carries a spring penetration ``-t_n / p_n`` at least as deep, give or take the tolerance;
@@ -127,10 +127,10 @@ def _inside(x, topo, min_depth, pairs, boxes, midpoints) -> Penetrations:
 
 def edge_penetrations(x: np.ndarray, topo: VertexTopology, min_depth: float = 0.0,
                       pairs: np.ndarray | None = None, boxes=None) -> Penetrations:
-    """Every edge of ``x`` whose midpoint lies inside another block deeper than ``min_depth``
-    (m), or, where the midpoint is outside, the middle of a stretch of the edge between its
-    crossings with the block's boundary (the deepest such middle): ``vertex`` is the edge's
-    start vertex (the edge runs to ``topo.nxt[vertex]``).
+    """Every edge of ``x`` that lies inside another block deeper than ``min_depth`` (m) at
+    its midpoint or at the middle of a stretch between its crossings with the block's
+    boundary (the deepest of those probes): ``vertex`` is the edge's start vertex (the edge
+    runs to ``topo.nxt[vertex]``).
 
     Examples
     --------
