@@ -330,7 +330,7 @@ def test_a_bolted_triangle_pulled_under_an_l_in_static_steps_is_refused_or_kept_
     incline's line; the two overlapped by 5.5% of the triangle's area with no contact between
     them, and no corner or edge midpoint more than 4e-5 m inside the other (a strict xfail
     from a hunt of 2026-12-06). Since the narrow phase holds a sunk corner by the edge along
-    which the overlap is least (``dda.contact.detection._fan_overlap``), the L's corner is
+    which the overlap is least (``dda.contact.inside._fan_overlap``), the L's corner is
     held by the triangle's edge and the two stay apart (overlap 8e-8 of the area)."""
     from dda.contact import StaticDynamicTransition
 

@@ -31,19 +31,23 @@ deep: at a corner where four blocks meet, a vertex sliding along one joint past 
 not be taken as deep behind the other joint's line), then one whose foot lies on the edge, then
 the one whose outward normal is most opposed to the vertex's outward bisector. For a sunk
 vertex "nearest" means the least overlap along the edge's normal, seen from the vertex
-(:func:`_fan_overlap`: how deep behind the edge's line the vertex and the stretches of its
-own two edges inside the block reach, a separating axis test local to the vertex): its
-nearest edge can be the wrong one, as for two corners that hit tip to tip and slid past each
-other, each nearest the other's side while the overlap runs under the other's face. For a convex
-block the nearest edge is the least deep one (outside it the feet of two edges never both lie
-on their edges, and in a corner's wedge the two are equally near). At a reflex (concave) vertex
-of the block the solid is the union of the two edges' half-planes, and a vertex in the corner
-is near both: the edge across a reflex vertex from the chosen one is kept as well (Shi's rule
-for a convex vertex entering a concave angle: two vertex-edge contacts). A vertex-vertex case
-(the foot at the end of the edge, the two vertices within the search distance) shows up as two
-mirrored pairs, P on an edge at Q and Q on an edge at P; only one is kept: the one whose foot
-lies on its edge, else the better opposed one; both when the other's vertex is inside the other
-block deeper than ``sunk_depth`` (corners sunk into each other).
+(:func:`dda.contact.inside._fan_overlap`: how deep behind the edge's line the vertex and the
+stretches of its own two edges inside the block reach, a separating axis test local to the
+vertex): its nearest edge can be the wrong one, as for two corners that hit tip to tip and
+slid past each other, each nearest the other's side while the overlap runs under the other's
+face. For a convex block the nearest edge is the least deep one (outside it the feet of two
+edges never both lie on their edges, and in a corner's wedge the two are equally near). At a
+reflex (concave) vertex of the block the solid is the union of the two edges' half-planes,
+and a vertex in the corner is near both: the edge across a reflex vertex from the chosen one
+is kept as well (Shi's rule for a convex vertex entering a concave angle: two vertex-edge
+contacts). A vertex-vertex case (the foot at the end of the edge, the two vertices within the
+search distance) shows up as two mirrored pairs, P on an edge at Q and Q on an edge at P; only
+one is kept: the one whose foot lies on its edge, else the better opposed one; both when the
+other's vertex is inside the other block deeper than ``sunk_depth`` (corners sunk into each
+other).
+
+The point-inside-block probes (inside or not, how deep, the overlap seen from a sunk vertex)
+live in :mod:`dda.contact.inside`, shared with the penetration guard.
 """
 
 from __future__ import annotations
@@ -54,6 +58,7 @@ from functools import cached_property
 import numpy as np
 from numba import njit
 
+from dda.contact.inside import _fan_overlap, _point_in_block, inside_depth
 from dda.contact.kinematics import ContactGeometry, contact_geometry
 from dda.geometry import _segments_cross, next_vertex_index, polygon_integrals
 from dda.kernels.geometry import vertex_turns
@@ -950,239 +955,6 @@ def _mirrored_kernel(vertex, edge, xi, p1, score, on_edge, sunk, x, nxt, reach):
                     drop[i] = True
         start = stop
     return drop
-
-
-def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.ndarray,
-                 nxt: np.ndarray, nearest: bool = True):
-    """Whether each point ``p`` (n, 2) lies inside block ``kblock`` (n,), its distance to the
-    block's boundary and the nearest edge (CCW start index; None unless ``nearest``), all
-    points at once.
-
-    Inside is the even-odd rule on a ray towards +x (half-open in y, so a ray through a
-    vertex counts once): exact for non-convex blocks. The distance is the least distance to
-    an edge segment; the nearest edge is the first (in the block's order) at that distance.
-    """
-    if len(p) == 0:
-        z = np.zeros(0, dtype=np.int64)
-        return np.zeros(0, dtype=bool), np.zeros(0), z
-    inside, depth, near = _inside_depth_kernel(
-        np.ascontiguousarray(p, dtype=np.float64), np.ascontiguousarray(kblock, dtype=np.int64),
-        np.ascontiguousarray(x, dtype=np.float64), np.ascontiguousarray(offsets, dtype=np.int64),
-        np.ascontiguousarray(nxt, dtype=np.int64))
-    return inside, depth, (near if nearest else None)
-
-
-@njit(cache=True)
-def _point_in_block(qx, qy, k, x, offsets, nxt):
-    """Inside (even-odd), depth (least distance to an edge segment) and nearest edge of the
-    point (qx, qy) and block k, each edge evaluated as the numpy expressions did (an einsum
-    of two terms is ``(0 + a0 b0) + a1 b1``)."""
-    inside = False
-    depth = np.inf
-    near = -1
-    for e in range(offsets[k], offsets[k + 1]):
-        f = nxt[e]
-        ax, ay = x[e, 0], x[e, 1]
-        bx, by = x[f, 0], x[f, 1]
-        abx, aby = bx - ax, by - ay
-        qax, qay = qx - ax, qy - ay
-        # compare the end points themselves: a + (b - a) need not be b in floating point,
-        # and a ray through a vertex would then count it twice or not at all
-        if (ay > qy) != (by > qy):
-            if qx < ax + qay * abx / aby:
-                inside = not inside
-        len2 = (0.0 + abx * abx) + aby * aby
-        t = ((0.0 + qax * abx) + qay * aby) / max(len2, 1e-300)
-        t = min(max(t, 0.0), 1.0)
-        dist = np.hypot(qx - (ax + t * abx), qy - (ay + t * aby))
-        if near < 0 or dist < depth:
-            depth = dist
-            near = e
-    return inside, depth, near
-
-
-@njit(cache=True)
-def _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters):
-    """Where the segment from (ax, ay) along (dx, dy) crosses block k's edges strictly
-    between its ends: the parameters t in (0, 1) and whether it enters k there (crosses a
-    CCW edge from its right to its left), written to ``cuts[:n]`` and ``enters[:n]`` in
-    k's edge order; returns n. The segment's ends must lie strictly on either side of the
-    edge's line, and the edge's ends on either side of the segment's line or on it."""
-    n = 0
-    for e in range(offsets[k], offsets[k + 1]):
-        f = nxt[e]
-        px, py = x[e, 0], x[e, 1]
-        ex, ey = x[f, 0] - px, x[f, 1] - py
-        sa = ex * (ay - py) - ey * (ax - px)  # > 0: the start on k's side of the line
-        den = dx * ey - dy * ex
-        sb = sa - den  # ... and the end
-        if not ((sa < 0.0 < sb) or (sb < 0.0 < sa)):
-            continue
-        sp = dx * (py - ay) - dy * (px - ax)
-        sq = dx * (x[f, 1] - ay) - dy * (x[f, 0] - ax)
-        if (sp > 0.0 and sq > 0.0) or (sp < 0.0 and sq < 0.0):
-            continue
-        cuts[n] = sa / den
-        enters[n] = sa < 0.0
-        n += 1
-    return n
-
-
-@njit(cache=True)
-def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
-    """How deep behind an edge's line (outward normal (nx, ny); the vertex ``gap`` from it,
-    negative behind) the part of vertex v's block near v that lies inside block k reaches:
-    the larger of ``-gap`` and, for each edge at v that heads behind the line, the depth of
-    the point where it leaves k (its other end when it does not).
-
-    It is how far the edge's spring must push v's block out along (nx, ny) to clear k
-    there: the overlap of the two blocks along that normal, seen from v (the separating
-    axis test, local to v's two edges). For a corner sunk into a block's corner the nearest
-    edge can be the wrong one: two corners that hit each other tip to tip and slid past
-    each other are each nearest the other's side, while the overlap runs along the side's
-    other edge, whose spring alone pushes them apart.
-    """
-    px, py = x[v, 0], x[v, 1]
-    over = -gap
-    m = offsets[k + 1] - offsets[k]
-    cuts, enters = np.empty(m), np.empty(m, dtype=np.bool_)
-    for nb in (prv[v], nxt[v]):
-        ax, ay = x[nb, 0] - px, x[nb, 1] - py
-        a_n = (0.0 + ax * nx) + ay * ny
-        if a_n >= 0.0:
-            continue
-        t_exit = 1.0
-        for i in range(_crossings(px, py, ax, ay, k, x, offsets, nxt, cuts, enters)):
-            if cuts[i] > 1e-12 and cuts[i] < t_exit:
-                t_exit = cuts[i]
-        over = max(over, -gap - t_exit * a_n)
-    return over
-
-
-@njit(cache=True)
-def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, cuts,
-                     enters, probed):
-    """The deepest inside block k of edge v -> w's midpoint (``inside`` k at ``depth``,
-    ``near`` its nearest edge, as :func:`_point_in_block` gives them) and the middles of the
-    edge's stretches between its crossings with k's boundary, as ``(inside, depth, near)``.
-
-    An edge that crosses into k and out again between its ends can lie inside k over a
-    stretch that neither its ends nor its midpoint reach (two blocks whose corners passed
-    each other, a bar across another); the middle of each stretch inside is probed. A
-    stretch no longer than ``2 min_depth`` is skipped: its ends are on
-    k's boundary, so nothing of it is deeper than half its length, nor the stretch through
-    the midpoint when ``probed`` (the midpoint stands for it). ``cuts`` and ``enters``:
-    scratch of at least k's size."""
-    ax, ay = x[v, 0], x[v, 1]
-    dx, dy = x[w, 0] - ax, x[w, 1] - ay
-    n = _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters)
-    if n == 0:
-        return inside, depth, near
-    for i in range(1, n):  # by t (insertion: a handful)
-        t, en = cuts[i], enters[i]
-        j = i
-        while j > 0 and cuts[j - 1] > t:
-            cuts[j], enters[j] = cuts[j - 1], enters[j - 1]
-            j -= 1
-        cuts[j], enters[j] = t, en
-    length = np.hypot(dx, dy)
-    for i in range(n + 1):
-        # the stretch from crossing i - 1 (the edge's start for i = 0) to crossing i (its
-        # end for i = n): inside k when it starts by entering or ends by leaving
-        t0 = 0.0 if i == 0 else cuts[i - 1]
-        t1 = 1.0 if i == n else cuts[i]
-        if not ((i > 0 and enters[i - 1]) or (i < n and not enters[i])):
-            continue
-        if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length) or (
-                probed and t0 <= 0.5 <= t1):
-            continue
-        t = 0.5 * (t0 + t1)
-        ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
-        if ins and (not inside or dep > depth):
-            inside, depth, near = True, dep, ne
-    return inside, depth, near
-
-
-@njit(cache=True)
-def _inside_depth_kernel(p, kblock, x, offsets, nxt):
-    """:func:`inside_depth` of every point p[i] and block kblock[i]."""
-    n = p.shape[0]
-    inside = np.empty(n, dtype=np.bool_)
-    depth = np.empty(n)
-    near = np.empty(n, dtype=np.int64)
-    for i in range(n):
-        inside[i], depth[i], near[i] = _point_in_block(p[i, 0], p[i, 1], kblock[i], x, offsets,
-                                                       nxt)
-    return inside, depth, near
-
-
-@njit(cache=True)
-def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, midpoints=False):
-    """Every corner (``corner[v]``) of one block of a pair in the other's box inside that
-    block deeper than ``min_depth``: vertex, block, depth and nearest edge, the pairs in the
-    order (j, k) first, then (k, j) (the guard's :func:`vertex_penetrations`; kept in this
-    file with :func:`_point_in_block`, whose cache it shares). With ``midpoints`` the point of
-    vertex v is the deepest of its edge's (to ``nxt[v]``, every edge's) midpoint and the
-    middles of the edge's stretches inside the block between its crossings with the block's
-    boundary (:func:`_deepest_stretch`) (``corner`` unused; the guard's
-    :func:`dda.contact.penetration.edge_penetrations`)."""
-    n_pairs = pairs.shape[0]
-    cap = 0
-    for q in range(n_pairs):
-        for s in range(2):
-            cap += offsets[pairs[q, s] + 1] - offsets[pairs[q, s]]
-    out_v = np.empty(cap, dtype=np.int64)
-    out_k = np.empty(cap, dtype=np.int64)
-    out_d = np.empty(cap)
-    out_e = np.empty(cap, dtype=np.int64)
-    most = 0
-    for b in range(offsets.shape[0] - 1):
-        most = max(most, offsets[b + 1] - offsets[b])
-    cuts = np.empty(most)  # _deepest_stretch's scratch
-    enters = np.empty(most, dtype=np.bool_)
-    n_out = 0
-    for s in range(2):
-        for q in range(n_pairs):
-            j = pairs[q, s]
-            k = pairs[q, 1 - s]
-            xmin, ymin, xmax, ymax = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
-            sxmin, symin = xmin + min_depth, ymin + min_depth
-            sxmax, symax = xmax - min_depth, ymax - min_depth
-            for v in range(offsets[j], offsets[j + 1]):
-                if midpoints:
-                    # a point of k deeper than min_depth lies in k's box shrunk by it (a ray
-                    # from it along an axis leaves k within the box): nothing of an edge
-                    # outside that box can be deeper
-                    w = nxt[v]
-                    if not (max(x[v, 0], x[w, 0]) >= sxmin and min(x[v, 0], x[w, 0]) <= sxmax
-                            and max(x[v, 1], x[w, 1]) >= symin
-                            and min(x[v, 1], x[w, 1]) <= symax):
-                        continue
-                    px, py = 0.5 * (x[v, 0] + x[w, 0]), 0.5 * (x[v, 1] + x[w, 1])
-                    if px >= sxmin and px <= sxmax and py >= symin and py <= symax:
-                        inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
-                    else:
-                        inside, depth, near = False, np.inf, -1
-                    # the midpoint stands for its stretch where it is in k's box (probed, or
-                    # no deeper than min_depth)
-                    probed = px >= xmin and px <= xmax and py >= ymin and py <= ymax
-                    inside, depth, near = _deepest_stretch(v, w, k, x, offsets, nxt, inside,
-                                                           depth, near, min_depth, cuts,
-                                                           enters, probed)
-                else:
-                    px, py = x[v, 0], x[v, 1]
-                    if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
-                        continue
-                    if not corner[v]:
-                        continue
-                    inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
-                if inside and depth > min_depth:
-                    out_v[n_out] = v
-                    out_k[n_out] = k
-                    out_d[n_out] = depth
-                    out_e[n_out] = near
-                    n_out += 1
-    return out_v[:n_out].copy(), out_k[:n_out].copy(), out_d[:n_out].copy(), out_e[:n_out].copy()
 
 
 def find_overlaps(x: np.ndarray, offsets: np.ndarray, rel_tol: float = 1e-6) -> list:

@@ -33,13 +33,8 @@ import numpy as np
 from numba import njit
 
 from dda.contact.contacts import OPEN, STICK
-from dda.contact.detection import (
-    VertexTopology,
-    _boxes,
-    _corners_inside_kernel,
-    bounding_boxes,
-    broad_phase,
-)
+from dda.contact.detection import VertexTopology, _boxes, bounding_boxes, broad_phase
+from dda.contact.inside import _corners_inside_kernel
 from dda.kernels.geometry import vertex_turns
 from dda.kernels.kinematics import _frame
 from dda.kernels.sums import run_sum
