@@ -190,7 +190,7 @@ from dda.contact.friction import FrictionLaw
 from dda.penalty_advice import TARGET_DEPTH
 
 __all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose",
-           "largest_onset_drop", "shaking_frequency", "steps_for_drop"]
+           "largest_onset_drop", "penalty_floor", "shaking_frequency", "steps_for_drop"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block, for
 #: a solver without its own ``auto_kappa`` (legacy DDA's; the fully implicit method takes 10)
@@ -293,6 +293,47 @@ def _block_loads(model, a_max: float) -> tuple[np.ndarray, np.ndarray]:
         np.add.at(load, model.load_block, np.hypot(*model.load_constant.T))
     factor = 1.0 + (a_max / g if g > 0.0 else 0.0)
     return 0.5 * load * factor, carries
+
+
+def _load_floor(model, loads: np.ndarray, a_max: float) -> tuple[float, str]:
+    """Rule 3: the penalty ``F / (TARGET_DEPTH h)`` that keeps the largest load per contact
+    ``F`` (:func:`_block_loads`) within ``TARGET_DEPTH`` of its block's half-width ``h`` (N/m),
+    and what it keeps."""
+    h = model.thickness
+    need = np.where(model.free, loads / (TARGET_DEPTH * h), 0.0)
+    worst = int(np.argmax(need))
+    return float(need[worst]), (
+        f"keeps the load under {model.block_label(worst)} ({loads[worst]:.3g} N/m per "
+        f"contact{', with the shaking' if a_max else ''}) within {100 * TARGET_DEPTH:g}% of "
+        f"its half-width ({h[worst]:.3g} m)")
+
+
+def _mass_floor(model, carries: np.ndarray) -> tuple[float, str]:
+    """Rule 4: ``MASS_STIFFNESS`` times the smallest Young's modulus of the blocks that carry
+    free blocks (``carries``, :func:`_block_loads`), or 0 where none does; and whose it is."""
+    if not carries.any():
+        return 0.0, ""
+    young = np.where(carries, model.young, np.inf)
+    soft = int(np.argmin(young))
+    return MASS_STIFFNESS * float(young[soft]), (
+        f"{MASS_STIFFNESS:g} x the Young's modulus {young[soft]:.3g} Pa of "
+        f"{model.block_label(soft)}, which carries blocks")
+
+
+def penalty_floor(model) -> tuple[float, str]:
+    """The least normal penalty the rule takes for ``model`` at rest (N/m), and why: rule 3
+    (the resting loads, no shaking) and rule 4 (a jointed mass not softer than its rock).
+
+    A penalty softer than this sinks a resting load deeper than ``TARGET_DEPTH`` of a block's
+    half-width, or softens the mass the blocks make; :mod:`dda.penalty_advice` does not
+    advise one (it advises a shorter dt instead).
+    """
+    loads, carries = _block_loads(model, 0.0)
+    need, why = _load_floor(model, loads, 0.0)
+    floor, why_mass = _mass_floor(model, carries)
+    if floor > need:
+        return floor, f"{why_mass}; joints softer than the rock soften the whole mass"
+    return need, f"the penalty that {why}"
 
 
 def largest_onset_drop(model) -> tuple[float, FrictionLaw | None]:
@@ -440,16 +481,11 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     reason = (f"normal penalty: {kappa:g} x Newmark's inertia 2 m / dt^2 = {inertia:.3g} N/m "
               f"of the lightest free block ({name}, {m:.3g} kg/m): {pn:.3g} N/m")
     loads, carries = _block_loads(model, a_max)
-    need = np.where(free, loads / (TARGET_DEPTH * h), 0.0)
-    worst = int(np.argmax(need))
-    if need[worst] > pn:
-        who = model.block_label(worst)
-        pn = float(need[worst])
-        reason = (f"normal penalty: {pn:.3g} N/m keeps the load under {who} ({loads[worst]:.3g} "
-                  f"N/m per contact{', with the shaking' if a_max else ''}) within "
-                  f"{100 * TARGET_DEPTH:g}% of its half-width ({h[worst]:.3g} m); "
-                  f"{kappa:g} x the inertia 2 m / dt^2 of the lightest block would be "
-                  f"{kappa * inertia:.3g} N/m")
+    need, why = _load_floor(model, loads, a_max)
+    if need > pn:
+        pn = need
+        reason = (f"normal penalty: {pn:.3g} N/m {why}; {kappa:g} x the inertia 2 m / dt^2 of "
+                  f"the lightest block would be {kappa * inertia:.3g} N/m")
     if speeds is not None and np.any(speeds[free] > 0.0):
         # rule 7: an impact at the start's speed v sinks a block of mass m by v sqrt(m / p)
         # (an undamped spring; the dashpot only makes it less)
@@ -464,17 +500,12 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
                       f"half-width ({h[fast]:.3g} m): m v^2 / depth^2; {kappa:g} x the "
                       f"inertia 2 m / dt^2 of the lightest block would be "
                       f"{kappa * inertia:.3g} N/m")
-    if carries.any():
-        young = np.where(carries, model.young, np.inf)
-        soft = int(np.argmin(young))
-        floor = MASS_STIFFNESS * float(young[soft])
-        if floor > pn:
-            pn = floor
-            reason = (f"normal penalty: {MASS_STIFFNESS:g} x the Young's modulus "
-                      f"{young[soft]:.3g} Pa of {model.block_label(soft)}, which carries "
-                      f"blocks: {pn:.3g} N/m (joints softer than the rock soften the whole "
-                      f"mass; {kappa:g} x the inertia 2 m / dt^2 of the lightest block would "
-                      f"be {kappa * inertia:.3g} N/m)")
+    floor, why = _mass_floor(model, carries)
+    if floor > pn:
+        pn = floor
+        reason = (f"normal penalty: {why}: {pn:.3g} N/m (joints softer than the rock soften "
+                  f"the whole mass; {kappa:g} x the inertia 2 m / dt^2 of the lightest block "
+                  f"would be {kappa * inertia:.3g} N/m)")
     if auto_dt and pn > kappa * inertia:
         dt = float(np.sqrt(kappa * 2.0 * m / pn))
         reason += f"; dt shortened to {dt:.3g} s to keep it at {kappa:g} x the inertia"

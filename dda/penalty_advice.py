@@ -98,7 +98,8 @@ def soft_penalty_advice(depth: np.ndarray, half_width: np.ndarray, penalty: np.n
 
 
 def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt: float,
-                         name: str, mean_dt: float | None = None) -> str | None:
+                         name: str, mean_dt: float | None = None, floor: float = 0.0,
+                         floor_reason: str = "") -> str | None:
     """The warning for a penalty too stiff for the step size, or None.
 
     Parameters
@@ -110,6 +111,12 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
     dt : the step size asked for (s)
     name : that block's name
     mean_dt : the mean size of the steps taken (s), if known
+    floor : the least penalty the scene takes (N/m; :func:`dda.auto_settings.penalty_floor`),
+        and ``floor_reason`` why. Where ``STIFF_RATIO`` times the inertia at ``dt`` is below
+        it, the penalty advised is the floor, at the dt that keeps it at ``STIFF_RATIO``
+        times the inertia: a softer one would sink the resting loads or soften the mass
+        (the cut slope of ``examples/jointed_slope.py`` was advised 1e9 N/m at its 2e-3 s,
+        where joints of 2.2e9 N/m move its face twice as far as joints of 2e10)
 
     Examples
     --------
@@ -119,6 +126,16 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
     penalty 1e+13 N/m is 5e+04 times the inertia 2 m / dt^2 = 2e+08 N/m of block 'b' (the
     lightest free block). A penalty of about 2e9 N/m at dt = 0.001 s, or dt = 1.41e-05 s at
     this penalty, keeps the springs from dominating the step.
+
+    Where the scene takes no softer penalty than that (a floor of 1e10 N/m):
+
+    >>> print(stiff_penalty_advice(40, 100, 1e13, 100.0, 1e-3, "block 'b'", floor=1e10,
+    ...       floor_reason="the reason"))  # doctest: +NORMALIZE_WHITESPACE
+    the step was cut 40 times in 100 steps because the contacts would not settle: the normal
+    penalty 1e+13 N/m is 5e+04 times the inertia 2 m / dt^2 = 2e+08 N/m of block 'b' (the
+    lightest free block). A penalty of about 1e10 N/m at dt = 0.000447 s (the least this
+    scene takes, 1e+10 N/m: the reason), or dt = 1.41e-05 s at this penalty, keeps the
+    springs from dominating the step.
     """
     held = mean_dt is not None and mean_dt <= STIFF_HELD * dt
     if cuts < STIFF_CUTS or (cuts < STIFF_SHARE * steps and not held):
@@ -131,11 +148,18 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
         return None
     dt_ok = math.sqrt(2.0 * STIFF_RATIO * mass / penalty)
     mean = f" (they average dt = {mean_dt:.3g} s)" if held else ""
+    if STIFF_RATIO * inertia >= floor:
+        softer = f"{_nice(STIFF_RATIO * inertia)} N/m at dt = {dt:g} s"
+    else:
+        p_floor = _nice(floor)
+        dt_floor = math.sqrt(2.0 * STIFF_RATIO * mass / float(p_floor))
+        softer = (f"{p_floor} N/m at dt = {dt_floor:.3g} s (the least this scene takes, "
+                  f"{floor:.3g} N/m: {floor_reason})")
     return (f"the step was cut {cuts} times in {steps} steps{mean} because the contacts would "
             f"not settle: the normal penalty {penalty:.3g} N/m is {ratio:.2g} times the inertia "
             f"2 m / dt^2 = {inertia:.3g} N/m of {name} (the lightest free block). A penalty of "
-            f"about {_nice(STIFF_RATIO * inertia)} N/m at dt = {dt:g} s, or dt = {dt_ok:.3g} s "
-            "at this penalty, keeps the springs from dominating the step.")
+            f"about {softer}, or dt = {dt_ok:.3g} s at this penalty, keeps the springs from "
+            "dominating the step.")
 
 
 class PenaltyAdvisor:
@@ -194,10 +218,13 @@ class PenaltyAdvisor:
         model = self.model
         mass = model.density * model.size**2  # the blocks' masses at the start
         light = int(np.flatnonzero(model.free)[np.argmin(mass[model.free])])
+        from dda.auto_settings import penalty_floor  # noqa: PLC0415 (it imports this module)
+
+        floor, why = penalty_floor(model)
         message = stiff_penalty_advice(contact_cuts, steps,
                                        float(model.joints.normal_penalty.max()),
                                        float(mass[light]), self.dt, model.block_label(light),
-                                       mean_dt)
+                                       mean_dt, floor, why)
         if message:
             self.warned.add("stiff")
             warnings.warn(message, PenaltyWarning, stacklevel=6)

@@ -44,18 +44,47 @@ def shaken_slope(penalty, dt=2e-3, duration=0.05):
 def test_a_penalty_too_stiff_for_dt_is_told_once():
     """The 28-block shaken cut slope at 1e12 N/m (100 E) and dt 2e-3: its contacts settle
     only at a small fraction of dt, and the step control soon waits long before it tries a
-    larger one, so the cuts are few but the steps small; the warning says so."""
+    larger one, so the cuts are few but the steps small; the warning says so.
+
+    Its blocks carry blocks, so the penalty advised is no softer than the rule's floor of
+    2 E (:func:`dda.auto_settings.penalty_floor`), at the dt that keeps it at ten times the
+    lightest block's inertia: 2e10 N/m at 5.7e-4 s. (The advice was 2e9 N/m at the 2e-3 s
+    asked for: it settled, in a mass made softer by its joints.)"""
     result, said = shaken_slope(1e12)
     cuts = [r for _, _, r in result.stats.cuts if contact_cut(r)]
     assert len(cuts) >= 20
     assert len(said) == 1 and "because the contacts would not settle" in said[0]
     assert "they average dt" in said[0]
-    penalty = float(re.search(r"A penalty of about ([0-9e.+-]+) N/m", said[0]).group(1))
-    # with the advised penalty the same run cuts far fewer steps and says nothing
-    fewer, again = shaken_slope(penalty)
+    advice = re.search(r"A penalty of about ([0-9e.+-]+) N/m at dt = ([0-9e.+-]+) s", said[0])
+    penalty, dt = float(advice.group(1)), float(advice.group(2))
+    assert penalty >= 2.0 * 1e10  # the rock's E is 1e10 Pa
+    assert "which carries blocks" in said[0]
+    # with the advised penalty and dt the same run cuts far fewer steps and says nothing
+    fewer, again = shaken_slope(penalty, dt=dt)
     assert again == []
     assert len(fewer.stats.cuts) < len(cuts) / 4
     assert len(fewer.stats) < len(result.stats) / 4
+
+
+def test_the_stiff_advice_keeps_a_given_floor_and_a_scene_without_one():
+    """Below the floor the advised penalty is the floor, at a dt shorter than the one asked
+    for; above it, the penalty at the dt asked for (unchanged)."""
+    from dda.penalty_advice import STIFF_RATIO, stiff_penalty_advice
+
+    mass, dt = 100.0, 1e-3
+    inertia = 2.0 * mass / dt**2
+    pattern = r"A penalty of about ([0-9e.+-]+) N/m at dt = ([0-9e.+-]+) s"
+    for floor in (0.0, 0.5 * STIFF_RATIO * inertia):
+        said = stiff_penalty_advice(40, 100, 1e13, mass, dt, "block 'b'", floor=floor)
+        p, at = map(float, re.search(pattern, said).groups())
+        assert p == pytest.approx(STIFF_RATIO * inertia) and at == dt
+    floor = 37.0 * STIFF_RATIO * inertia
+    said = stiff_penalty_advice(40, 100, 1e13, mass, dt, "block 'b'", floor=floor,
+                                floor_reason="why")
+    p, at = map(float, re.search(pattern, said).groups())
+    assert floor <= p < 1.1 * floor
+    assert p / (2.0 * mass / at**2) == pytest.approx(STIFF_RATIO, rel=1e-2)  # dt to 3 digits
+    assert "why" in said
 
 
 def test_an_impact_at_a_stiff_penalty_settles():
