@@ -167,7 +167,7 @@ def describe(loaded, budget: float = 2.0) -> str:
         f"vertices   {len(model.x_initial)}",
         f"unknowns   {unknowns}",
         f"contacts   {len(touch)} vertex-edge pairs touching at the start "
-        f"({touch.pairs} block pairs)",
+        f"({touch.pairs} block pair{'' if touch.pairs == 1 else 's'})",
         f"joints     {len(model.joints.normal_penalty)} ({laws})",
         f"effects    {', '.join(loaded.effects) or 'none'}",
         f"solver     {loaded.solver!r}, dt {sim.dt:g} s, {sim.analysis}",
@@ -327,8 +327,8 @@ def main(argv=None) -> int:
                        "checkpoint")
     p.add_argument("scene", help="SCENE.toml, SCRIPT.py or RUN.ckpt (a checkpoint of a run "
                    "to finish, or to go on for --duration)")
-    p.add_argument("--out", help="output folder (default: the scene's [output] dir, or "
-                   "out/NAME)")
+    p.add_argument("--out", help="output folder (default: the scene's [output] dir, under "
+                   "the scene file's folder, or else out/NAME under the current folder)")
     p.add_argument("--duration", type=float, help="simulated time (s), overrides the file's")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument("--allow-outside-output", action="store_true",
@@ -337,12 +337,14 @@ def main(argv=None) -> int:
                    "outside the checkpoint's folder (both refused by default)")
     p.set_defaults(func=cmd_run)
     p = sub.add_parser("demo", help="run a shaken stack of blocks (writes out/stack_demo)")
-    p.add_argument("--out", help="output folder")
-    p.add_argument("--duration", type=float, help="simulated time (s)")
-    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("--out", help="output folder (default: out/stack_demo under the current "
+                   "folder)")
+    p.add_argument("--duration", type=float, help="simulated time (s; default: the demo "
+                   "scene's own, dda/scenes/demo.toml)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=cmd_demo)
     p = sub.add_parser("render", help="render a PVD series to PNG, GIF and/or MP4 (pyvista)")
-    p.add_argument("pvd")
+    p.add_argument("pvd", help="the series' PVD file (as `dda run` writes it)")
     p.add_argument("--png", help="PNG of one frame (default: next to the PVD)")
     p.add_argument("--gif", help="animation, GIF")
     p.add_argument("--mp4", help="animation, MP4 (H.264; needs dda[vis])")
@@ -354,7 +356,8 @@ def main(argv=None) -> int:
                    "block_id); 'auto' (the default): the shaken block when the files mark "
                    "one; 'none': as they are")
     p.add_argument("--frame", type=int, default=-1, help="frame of the PNG (default last)")
-    p.add_argument("--fps", type=float, default=10.0)
+    p.add_argument("--fps", type=float, default=10.0,
+                   help="frames per second of the GIF and MP4 (default 10)")
     p.set_defaults(func=cmd_render)
     p = sub.add_parser("fos", help="the factor of safety of a scene by strength reduction "
                        "of its joints (dda.studies.strength_reduction)")

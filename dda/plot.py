@@ -6,6 +6,8 @@ VTU/PVD series (pyvista, off screen).
 
 from __future__ import annotations
 
+import os
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -131,6 +133,12 @@ def _pyvista():
     except ImportError:
         raise ImportError("rendering needs pyvista: pip install 'dda[vis]'") from None
     pv.OFF_SCREEN = True
+    if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+        # headless: VTK's X window tries the display first and logs a warning in colour on
+        # every render ("bad X server connection") before it renders off screen anyway
+        from vtkmodules.vtkCommonCore import vtkLogger  # noqa: PLC0415
+
+        vtkLogger.SetStderrVerbosity(vtkLogger.VERBOSITY_ERROR)
     return pv
 
 

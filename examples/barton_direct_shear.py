@@ -124,7 +124,8 @@ def plot(runs: dict, path: Path):
     ax1.set_xlabel("accumulated slip (mm)")
     ax1.set_ylabel("shear stress (kPa)")
     ax1.set_title(f"JRC {JRC:g}, JCS {JCS / 1e6:g} MPa, phi_r {PHI_R:g} deg")
-    ax1.legend(fontsize=8)
+    ax1.set_ylim(0, 1.35 * ax1.get_ylim()[1])  # room above the curves' tails for the legend
+    ax1.legend(fontsize=8, loc="upper right")
     sig = np.linspace(0.05e6, 1.1 * max(s for s, _ in runs), 200)
     ax2.plot(sig / 1e6, peak_strength(sig) / 1e6, "k-", label="Barton's peak strength")
     ax2.plot(sig / 1e6, sig * np.tan(np.radians(PHI_R)) / 1e6, "k:", label="residual")

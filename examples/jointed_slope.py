@@ -6,17 +6,18 @@ into it, 1.6 m apart, 80% persistent in 5 m traces (``dda.geometry.cut_blocks``)
 thinner than 10 cm are dropped. It rests on a base, against a back wall fixed to it, that
 shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 
-With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 27 s: 912
-steps, 45 of them cut because OPEN-CLOSE did not settle in 30 passes, and the face blocks end
-22.0 mm (median) and 27.6 mm (most) from where they started relative to the base.
-``--solver newton``: about 38 s, 656 steps, 28 cut, 21.7 / 26.5 mm (the two side by side on
-two cores, the session of 2026-12-06). The penalty is
-stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x 1.6 m block's contact
-period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the contacts settle only at a
-fraction of the 2e-3 s asked for and the steps average 3.2e-4 s; ``dda.PenaltyWarning`` says so
-after 20 cuts. About half the cuts are tries at twice the working step that fail (20 of 35
-in an earlier version of the run), the rest steps whose OPEN-CLOSE ends in a cycle of a few
-contacts' states and lagged normal forces.
+With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 30 s: 1,048
+steps, 46 of them cut because OPEN-CLOSE did not settle in 30 passes, and the face blocks end
+21.94 mm (median) and 27.10 mm (most) from where they started relative to the base (36-38 s
+beside other runs on two cores, 2026-12-06). ``--solver newton``: 801 steps, 21 cut, 22.35 /
+26.52 mm (77 s beside two other runs on two cores; 38 s for 656 steps in an earlier version,
+alone). The penalty is stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x
+1.6 m block's contact period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the
+contacts settle only at a fraction of the 2e-3 s asked for and the steps average 2.9e-4 s;
+``dda.PenaltyWarning`` says so after 20 cuts, and advises 2e10 N/m (no softer: the rule's 2 E
+for a jointed mass, below) at 4.3e-4 s, or 2.7e-4 s at 5e10 N/m. About half the cuts are
+tries at twice the working step that fail (20 of 35 in an earlier version of the run), the
+rest steps whose OPEN-CLOSE ends in a cycle of a few contacts' states and lagged normal forces.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``; ``sim.choices``
 is printed): blocks carry blocks here, so the penalty is twice the rock's Young's modulus, 2e10

@@ -209,7 +209,7 @@ def plot(runs: list[dict], path: Path):
         axes[0, j].axhline(-np.degrees(TIP_ANGLE), color="k", ls=":", lw=1)
         axes[0, j].set_title(f"{freq:g} Hz (dotted: the stack's tipping angle)", fontsize=10)
         if any(x["freq"] == freq for x in runs):
-            axes[0, j].legend(fontsize=7, loc="upper left")
+            axes[0, j].legend(fontsize=7, loc="lower right")  # under the peaks
         axes[1, j].set_xlabel("time (s)")
     axes[0, 0].set_ylabel("top cube rotation (deg)")
     axes[1, 0].set_ylabel("top cube displacement\nrelative to the table (mm)")

@@ -1,5 +1,6 @@
 """The dda command (run, demo, render, info) and the pictures: files that are not blank."""
 
+import os
 import subprocess
 import sys
 
@@ -82,6 +83,20 @@ def test_render_png_and_gif(series, tmp_path):
         assert im.n_frames == 11
         im.seek(5)
         assert not_blank(np.asarray(im.convert("RGB"), dtype=float))
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="an X display's warning")
+def test_render_without_a_display_prints_no_vtk_warning(series, tmp_path):
+    """Headless, VTK's X window logged "bad X server connection" in colour on stderr at every
+    render before rendering off screen anyway."""
+    scene, pvd = series
+    env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
+    proc = subprocess.run([sys.executable, "-m", "dda", "render", str(pvd), "--png",
+                           str(tmp_path / "a.png")], capture_output=True, text=True, env=env,
+                          timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "WARN" not in proc.stderr and "X server" not in proc.stderr, proc.stderr
+    assert not_blank(png_pixels(tmp_path / "a.png"))
 
 
 def test_render_mp4(series, tmp_path):
