@@ -124,19 +124,40 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
 
 
 @njit(cache=True)
+def _segment_distance(px, py, e, x, nxt):
+    """The distance from (px, py) to edge e (from vertex e to ``nxt[e]``) as a segment."""
+    ax, ay = x[e, 0], x[e, 1]
+    abx, aby = x[nxt[e], 0] - ax, x[nxt[e], 1] - ay
+    len2 = (0.0 + abx * abx) + aby * aby
+    t = ((0.0 + (px - ax) * abx) + (py - ay) * aby) / max(len2, 1e-300)
+    t = min(max(t, 0.0), 1.0)
+    return np.hypot(px - (ax + t * abx), py - (ay + t * aby))
+
+
+@njit(cache=True)
 def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, cuts,
-                     enters, probed):
+                     enters, xmin, ymin, xmax, ymax):
     """The deepest inside block k of edge v -> w's midpoint (``inside`` k at ``depth``,
-    ``near`` its nearest edge, as :func:`_point_in_block` gives them) and the middles of the
-    edge's stretches between its crossings with k's boundary, as ``(inside, depth, near)``.
+    ``near`` its nearest edge, as :func:`_point_in_block` gives them; ``near`` -1: not
+    probed) and the middles of the edge's stretches between its crossings with k's
+    boundary, as ``(inside, depth, near)``.
 
     An edge that crosses into k and out again between its ends can lie inside k over a
     stretch that neither its ends nor its midpoint reach (two blocks whose corners passed
-    each other, a bar across another); the middle of each stretch inside is probed. A
-    stretch no longer than ``2 min_depth`` is skipped: its ends are on
-    k's boundary, so nothing of it is deeper than half its length, nor the stretch through
-    the midpoint when ``probed`` (the midpoint stands for it). ``cuts`` and ``enters``:
-    scratch of at least k's size."""
+    each other, a bar across another); the middle of each stretch inside is probed. For a
+    convex k a point's depth is concave along the stretch and zero at its ends, so the
+    middle reaches at least half the stretch's deepest, ``M``. A stretch is skipped where an
+    upper bound of ``M`` is at most ``min_depth``: half its length (its ends are on k's
+    boundary); the largest distance of its points to a side of k's box (a point's depth
+    is at most its distance to the box's boundary, as k lies in its box), which skips the
+    stretch of an edge resting along another block's edge; and, for the stretch through a
+    probed midpoint, the larger distance of its ends to the midpoint's nearest edge (a
+    point's depth is at most its distance to any edge, and that distance is convex along
+    the stretch). Where the midpoint is already at least half that bound deep, it stands
+    for its stretch. (A midpoint that stood for its stretch by lying in k's box alone hid a
+    bar laid across another with its midpoint at the other's side, 5 cm deep.)
+    ``cuts`` and ``enters``: scratch of at least k's size; k's box is ``xmin`` to ``xmax``
+    and ``ymin`` to ``ymax``."""
     ax, ay = x[v, 0], x[v, 1]
     dx, dy = x[w, 0] - ax, x[w, 1] - ay
     n = _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters)
@@ -150,6 +171,8 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
             j -= 1
         cuts[j], enters[j] = t, en
     length = np.hypot(dx, dy)
+    mid_near = near
+    mid_inside, mid_depth = inside, depth
     for i in range(n + 1):
         # the stretch from crossing i - 1 (the edge's start for i = 0) to crossing i (its
         # end for i = n): inside k when it starts by entering or ends by leaving
@@ -157,8 +180,18 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
         t1 = 1.0 if i == n else cuts[i]
         if not ((i > 0 and enters[i - 1]) or (i < n and not enters[i])):
             continue
-        if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length) or (
-                probed and t0 <= 0.5 <= t1):
+        if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length):
+            continue
+        x0, y0 = ax + t0 * dx, ay + t0 * dy
+        x1, y1 = ax + t1 * dx, ay + t1 * dy
+        bound = min(max(x0, x1) - xmin, max(y0, y1) - ymin, xmax - min(x0, x1),
+                    ymax - min(y0, y1))
+        if t0 <= 0.5 <= t1 and mid_near >= 0:
+            bound = min(bound, max(_segment_distance(x0, y0, mid_near, x, nxt),
+                                   _segment_distance(x1, y1, mid_near, x, nxt)))
+            if mid_inside and 2.0 * mid_depth >= bound:
+                continue
+        if bound <= min_depth:
             continue
         t = 0.5 * (t0 + t1)
         ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
@@ -227,12 +260,9 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
                         inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
                     else:
                         inside, depth, near = False, np.inf, -1
-                    # the midpoint stands for its stretch where it is in k's box (probed, or
-                    # no deeper than min_depth)
-                    probed = px >= xmin and px <= xmax and py >= ymin and py <= ymax
                     inside, depth, near = _deepest_stretch(v, w, k, x, offsets, nxt, inside,
                                                            depth, near, min_depth, cuts,
-                                                           enters, probed)
+                                                           enters, xmin, ymin, xmax, ymax)
                 else:
                     px, py = x[v, 0], x[v, 1]
                     if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
