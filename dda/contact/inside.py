@@ -116,8 +116,17 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
         if a_n >= 0.0:
             continue
         t_exit = 1.0
-        for i in range(_crossings(px, py, ax, ay, k, x, offsets, nxt, cuts, enters)):
-            if cuts[i] > 1e-12 and cuts[i] < t_exit:
+        n = _crossings(px, py, ax, ay, k, x, offsets, nxt, cuts, enters)
+        for i in range(n):
+            if enters[i] or not (cuts[i] > 1e-12 and cuts[i] < t_exit):
+                continue
+            # a leave matched by an entry at the same place is a touch of a reflex corner
+            # of k from inside (its two edges are crossed there, one each way), no exit
+            touch = False
+            for q in range(n):
+                if enters[q] and abs(cuts[q] - cuts[i]) <= 1e-12:
+                    touch = True
+            if not touch:
                 t_exit = cuts[i]
         over = max(over, -gap - t_exit * a_n)
     return over
@@ -163,10 +172,11 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
     n = _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters)
     if n == 0:
         return inside, depth, near
-    for i in range(1, n):  # by t (insertion: a handful)
+    for i in range(1, n):  # by t, a leave before an entry at the same t (insertion: a handful)
         t, en = cuts[i], enters[i]
         j = i
-        while j > 0 and cuts[j - 1] > t:
+        while j > 0 and (cuts[j - 1] > t + 1e-12 or (abs(cuts[j - 1] - t) <= 1e-12
+                                                     and enters[j - 1] and not en)):
             cuts[j], enters[j] = cuts[j - 1], enters[j - 1]
             j -= 1
         cuts[j], enters[j] = t, en
