@@ -71,7 +71,9 @@ def _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters):
     between its ends: the parameters t in (0, 1) and whether it enters k there (crosses a
     CCW edge from its right to its left), written to ``cuts[:n]`` and ``enters[:n]`` in
     k's edge order; returns n. The segment's ends must lie strictly on either side of the
-    edge's line, and the edge's ends on either side of the segment's line or on it."""
+    edge's line, and the edge's ends on either side of the segment's line or on it: where
+    the segment runs through a vertex of k both of its edges count, so a segment that only
+    touches a reflex vertex from inside crosses there twice, once each way."""
     n = 0
     for e in range(offsets[k], offsets[k + 1]):
         f = nxt[e]
@@ -97,7 +99,8 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
     """How deep behind an edge's line (outward normal (nx, ny); the vertex ``gap`` from it,
     negative behind) the part of vertex v's block near v that lies inside block k reaches:
     the larger of ``-gap`` and, for each edge at v that heads behind the line, the depth of
-    the point where it leaves k (its other end when it does not).
+    the point where it leaves k (its other end when it does not; a touch of a reflex corner
+    of k from inside is no exit).
 
     It is how far the edge's spring must push v's block out along (nx, ny) to clear k
     there: the overlap of the two blocks along that normal, seen from v (the separating
