@@ -1,4 +1,5 @@
-"""The point-inside-block probes of :mod:`dda.contact.inside` at a touch of a reflex corner.
+"""The point-inside-block probes of :mod:`dda.contact.inside`: a touch of a reflex corner, and
+the thin overlap with which the guard's edge probe skips a pair.
 
 A segment that runs through a reflex vertex of block k from inside crosses the lines of both
 of its edges there, one each way, without leaving k. A review's search on integer grids found
@@ -8,9 +9,12 @@ stretch probe).
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from dda.contact.detection import VertexTopology
-from dda.contact.inside import _fan_overlap
+from dda.contact.inside import _fan_overlap, _thin_overlap
+from tests.test_penetration_guard import boundary_depth_in, star
 
 
 def stack(polys):
@@ -51,3 +55,33 @@ def test_the_stretch_before_a_touch_of_a_reflex_corner_is_probed():
     pen = edge_penetrations(x, topo, min_depth=0.0)
     depth = pen.depth[(pen.vertex == 0) & (pen.block == 1)]
     assert depth == pytest.approx([0.25], rel=1e-12)
+
+
+@settings(max_examples=100, deadline=None, derandomize=True)
+@given(st.lists(st.tuples(st.floats(0, 2), st.floats(0, 2),
+                          st.lists(st.floats(0.3, 1.0), min_size=3, max_size=9),
+                          st.floats(0, 6.3)), min_size=2, max_size=2),
+       st.floats(0.0, 0.5))
+def test_a_thin_overlap_bounds_the_depth_of_every_point(blocks, depth):
+    """Where two blocks overlap by at most ``depth`` across one of their edge normals
+    (``_thin_overlap``, with which the guard's edge probe skips a pair), no point of either
+    boundary lies deeper than that inside the other (shapely, sampled), convex or not."""
+    polys = [star(cx, cy, r, t) for cx, cy, r, t in blocks]
+    x, offsets, topo = stack(polys)
+    if not _thin_overlap(0, 1, x, offsets, topo.nxt, depth):
+        return
+    for j, k in ((0, 1), (1, 0)):
+        true, step = boundary_depth_in(polys[j], polys[k])
+        assert true <= depth + step
+
+
+def test_blocks_pressed_along_a_slanted_joint_are_thin():
+    """Two squares pressed 10 um into each other along a joint at 30 degrees: their boxes
+    reach far into each other, and the overlap across the joint's normal is 10 um."""
+    c, s = np.cos(np.radians(30.0)), np.sin(np.radians(30.0))
+    rot = np.array([[c, -s], [s, c]])
+    lower = np.array([(0, -1), (1, -1), (1, 0), (0, 0)], float) @ rot.T
+    upper = (np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float) - [0, 1e-5]) @ rot.T
+    x, offsets, topo = stack([lower, upper])
+    assert _thin_overlap(0, 1, x, offsets, topo.nxt, 2e-5)
+    assert not _thin_overlap(0, 1, x, offsets, topo.nxt, 0.5e-5)

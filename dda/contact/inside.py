@@ -227,6 +227,31 @@ def _inside_depth_kernel(p, kblock, x, offsets, nxt):
 
 
 @njit(cache=True)
+def _thin_overlap(a, b, x, offsets, nxt, depth):
+    """Whether blocks a and b overlap no deeper than ``depth`` across one of their edge
+    normals: their projections on it overlap by at most ``depth`` (or not at all).
+
+    The two blocks' common part then lies in a slab that wide across the axis, so no point of
+    either lies deeper than ``depth`` inside the other: moving it along the axis out of the
+    slab takes it out of the other block (any axis bounds it, for convex blocks or not)."""
+    for blk in (a, b):
+        for e in range(offsets[blk], offsets[blk + 1]):
+            f = nxt[e]
+            nx, ny = x[f, 1] - x[e, 1], x[e, 0] - x[f, 0]  # not normalized: depth scales
+            amin, amax = np.inf, -np.inf
+            for v in range(offsets[a], offsets[a + 1]):
+                p = x[v, 0] * nx + x[v, 1] * ny
+                amin, amax = min(amin, p), max(amax, p)
+            bmin, bmax = np.inf, -np.inf
+            for v in range(offsets[b], offsets[b + 1]):
+                p = x[v, 0] * nx + x[v, 1] * ny
+                bmin, bmax = min(bmin, p), max(bmax, p)
+            if min(amax - bmin, bmax - amin) <= depth * np.hypot(nx, ny):
+                return True
+    return False
+
+
+@njit(cache=True)
 def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, midpoints=False):
     """Every corner (``corner[v]``) of one block of a pair in the other's box inside that
     block deeper than ``min_depth``: vertex, block, depth and nearest edge, the pairs in the
@@ -250,9 +275,17 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
         most = max(most, offsets[b + 1] - offsets[b])
     cuts = np.empty(most)  # _deepest_stretch's scratch
     enters = np.empty(most, dtype=np.bool_)
+    # the edges' probes report nothing of a pair that overlaps no deeper than min_depth
+    # across one of its edge normals (:func:`_thin_overlap`): two blocks pressed together
+    # along a joint at an angle to the axes, whose boxes reach far into each other. Tested
+    # once a pair has an edge in the other's shrunk box (0 not yet, 1 thin, 2 not)
+    thin = np.zeros(n_pairs, dtype=np.int8)
+    test_thin = midpoints and min_depth > 0.0
     n_out = 0
     for s in range(2):
         for q in range(n_pairs):
+            if thin[q] == 1:
+                continue
             j = pairs[q, s]
             k = pairs[q, 1 - s]
             xmin, ymin, xmax, ymax = boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3]
@@ -268,6 +301,10 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
                             and max(x[v, 1], x[w, 1]) >= symin
                             and min(x[v, 1], x[w, 1]) <= symax):
                         continue
+                    if test_thin and thin[q] == 0:
+                        thin[q] = 1 if _thin_overlap(j, k, x, offsets, nxt, min_depth) else 2
+                        if thin[q] == 1:
+                            break
                     px, py = 0.5 * (x[v, 0] + x[w, 0]), 0.5 * (x[v, 1] + x[w, 1])
                     if px >= sxmin and px <= sxmax and py >= symin and py <= symax:
                         inside, depth, near = _point_in_block(px, py, k, x, offsets, nxt)
