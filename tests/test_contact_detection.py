@@ -354,7 +354,13 @@ def test_a_vertex_vertex_pair_across_another_joint_is_no_mirror():
     instead the sliver's corner on the larger block's side, and keep_closed took that for
     the closed contact's mirror: the face lost its lower contact and sank in 1.1 mm (the
     guard stopped the run at 0.197 s; these are the positions there). A mirror holds the same
-    joint: its edge runs against the contact's edge."""
+    joint: its edge runs against the contact's edge.
+
+    The narrow phase no longer finds the sliver's corner on the larger block's side: the
+    corner's wedge lies along the face, its outward bisector pointing out of the side (the
+    side's normal and the bisector at 80 degrees, one of its edges 19.8 degrees behind the
+    side's line, inside the entrance tolerance of 20). keep_closed's rule is checked with
+    that candidate given by hand."""
     big = [(60.01417, 17.5896), (59.77061, 18.25836), (58.31512, 17.5793),
            (58.65863, 16.63609), (60.01424, 17.26855)]
     sliver = [(60.0164, 18.36555), (59.77266, 18.25272), (60.01421, 17.58323)]
@@ -363,10 +369,34 @@ def test_a_vertex_vertex_pair_across_another_joint_is_no_mirror():
     d0, limit, sunk = 1e-3, 0.01, 0.25 * 0.01 * 0.108  # the sliver's quarter tolerance
     cand = narrow_phase(x, topo, d0, limit, sunk_depth=sunk)
     found = set(zip(cand.vertex.tolist(), cand.edge.tolist(), strict=True))
-    assert (7, 4) in found  # the sliver's corner on the big block's side
+    assert (7, 4) not in found  # the sliver's corner is not on the big block's side
     assert not any(v == 0 for v, _ in found)  # the big block's corner is not seen
-    kept = keep_closed(cand, np.array([0]), np.array([6]), x, topo, d0, limit, 2, sunk)
+    on_side = CandidateContacts(np.array([7]), np.array([4]), np.array([1]), np.array([0]))
+    kept = keep_closed(on_side, np.array([0]), np.array([6]), x, topo, d0, limit, 2, sunk)
     assert (0, 6) in set(zip(kept.vertex.tolist(), kept.edge.tolist(), strict=True))
+
+
+@pytest.mark.parametrize("into", [1e-6, 5e-6])
+def test_a_sharp_wedge_slid_along_a_floor_into_a_block_is_held_by_its_side(into):
+    """A triangle whose corner is a 6.8 degree wedge slides along the floor into a block that
+    stands on the same floor (a hunt's shaken U, Newton, t = 0.34 s): its tip lies on the
+    block's bottom edge, its edges on and behind that edge's line, within the entrance
+    tolerance. The tip is held by the block's side it pushes into, not by the bottom edge
+    (whose normal its outward bisector follows). Held by the bottom, or by nothing, the tip
+    slid 0.96 mm into the block and the guard stopped the run."""
+    from dda.contact.detection import VertexTopology as Topology
+
+    block = [(1.175311, -0.027005), (1.364135, -0.027005), (1.364135, -0.002217),
+             (1.175311, -0.002217)]
+    dx = 1.175311 + into - 1.176214
+    wedge = [(1.176214 + dx, -0.027005), (1.063506 + dx, -0.013617),
+             (1.076334 + dx, -0.027005)]
+    x = np.array(wedge + block, float)
+    topo = Topology.from_offsets(np.array([0, 3, 7]))
+    c = narrow_phase(x, topo, 1e-3, 1e-3, sunk_depth=1.44e-5)
+    held = set(zip(c.vertex.tolist(), c.edge.tolist(), strict=True))
+    assert (0, 6) in held  # the tip on the block's left side, (1.175, -0.0022) -> (1.175, -0.027)
+    assert (0, 3) not in held  # not on its bottom
 
 
 STEP = [(-0.5, -0.5), (2.0, -0.5), (2.0, 0.1), (1.5, 0.1), (1.0, 0.1), (1.0, 0.0), (0.0, 0.0),

@@ -20,9 +20,11 @@ A vertex-edge pair is a contact candidate when
    behind the line than it is inside the block (its distance to the block's boundary) plus
    ``sunk_depth`` (a vertex sunk into the block deeper than ``sunk_depth`` is exempt);
 4. the vertex is locally the first point of its block to cross the edge's line: both of its
-   edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG`` (a
-   sunk vertex is exempt: the edge along which the two blocks overlap least near it holds
-   it, see below).
+   edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG``, and
+   its outward bisector does not point the way of the edge's outward normal (a sharp wedge
+   slid along a floor into a block standing on it lies on that block's bottom edge, its
+   edges on and behind the line: the block's side holds it) (a sunk vertex is exempt: the
+   edge along which the two blocks overlap least near it holds it, see below).
 Of several edges of one block that pass for the same vertex, the nearest are preferred (the
 distance from the vertex to the edge as a segment: round a convex corner of a concave block,
 the top of a step's riser, the line of the tread below lies beyond a corner resting on the
@@ -702,6 +704,9 @@ class _Candidates:
 
 
 _SIN_TOL = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
+# a vertex whose outward bisector points along an edge's outward normal by more than this
+# (a cosine: round-off, not an angle) does not enter the edge
+_ARM_OUT = 1e-9
 
 
 @njit(cache=True)
@@ -825,7 +830,13 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                         # (:func:`_fan_overlap`) counts as the nearest
                         dist = max(dist, _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv))
                     else:
-                        entering = True
+                        # both edges at v leave it towards the outside of the line (within
+                        # the tolerance), and v's outward bisector does not point the way
+                        # the edge's normal does: a sharp wedge whose edges lie on and
+                        # behind the line (its corner slid along a floor into a block that
+                        # stands on the same floor, whose bottom edge it then lies on) is
+                        # not entering that edge
+                        entering = (0.0 + nx * bisector[v, 0]) + ny * bisector[v, 1] <= _ARM_OUT
                         for nb in (prv[v], nxt[v]):
                             ax, ay = x[nb, 0] - px, x[nb, 1] - py
                             arm_len = np.hypot(ax, ay)
