@@ -706,7 +706,7 @@ class _Candidates:
 _SIN_TOL = np.sin(np.radians(ENTRANCE_TOLERANCE_DEG))
 # a vertex whose outward bisector points along an edge's outward normal by more than this
 # (a cosine: round-off, not an angle) does not enter the edge
-_ARM_OUT = 1e-9
+_BISECTOR_OUT = 1e-9
 
 
 @njit(cache=True)
@@ -836,7 +836,8 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                         # behind the line (its corner slid along a floor into a block that
                         # stands on the same floor, whose bottom edge it then lies on) is
                         # not entering that edge
-                        entering = (0.0 + nx * bisector[v, 0]) + ny * bisector[v, 1] <= _ARM_OUT
+                        out = (0.0 + nx * bisector[v, 0]) + ny * bisector[v, 1]
+                        entering = out <= _BISECTOR_OUT
                         for nb in (prv[v], nxt[v]):
                             ax, ay = x[nb, 0] - px, x[nb, 1] - py
                             arm_len = np.hypot(ax, ay)

@@ -37,6 +37,17 @@ def inside_depth(p: np.ndarray, kblock: np.ndarray, x: np.ndarray, offsets: np.n
 
 
 @njit(cache=True)
+def _segment_distance(px, py, e, x, nxt):
+    """The distance from (px, py) to edge e (from vertex e to ``nxt[e]``) as a segment."""
+    ax, ay = x[e, 0], x[e, 1]
+    abx, aby = x[nxt[e], 0] - ax, x[nxt[e], 1] - ay
+    len2 = (0.0 + abx * abx) + aby * aby
+    t = ((0.0 + (px - ax) * abx) + (py - ay) * aby) / max(len2, 1e-300)
+    t = min(max(t, 0.0), 1.0)
+    return np.hypot(px - (ax + t * abx), py - (ay + t * aby))
+
+
+@njit(cache=True)
 def _point_in_block(qx, qy, k, x, offsets, nxt):
     """Inside (even-odd), depth (least distance to an edge segment) and nearest edge of the
     point (qx, qy) and block k, each edge evaluated as the numpy expressions did (an einsum
@@ -49,16 +60,13 @@ def _point_in_block(qx, qy, k, x, offsets, nxt):
         ax, ay = x[e, 0], x[e, 1]
         bx, by = x[f, 0], x[f, 1]
         abx, aby = bx - ax, by - ay
-        qax, qay = qx - ax, qy - ay
+        qay = qy - ay
         # compare the end points themselves: a + (b - a) need not be b in floating point,
         # and a ray through a vertex would then count it twice or not at all
         if (ay > qy) != (by > qy):
             if qx < ax + qay * abx / aby:
                 inside = not inside
-        len2 = (0.0 + abx * abx) + aby * aby
-        t = ((0.0 + qax * abx) + qay * aby) / max(len2, 1e-300)
-        t = min(max(t, 0.0), 1.0)
-        dist = np.hypot(qx - (ax + t * abx), qy - (ay + t * aby))
+        dist = _segment_distance(qx, qy, e, x, nxt)
         if near < 0 or dist < depth:
             depth = dist
             near = e
@@ -133,17 +141,6 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
                 t_exit = cuts[i]
         over = max(over, -gap - t_exit * a_n)
     return over
-
-
-@njit(cache=True)
-def _segment_distance(px, py, e, x, nxt):
-    """The distance from (px, py) to edge e (from vertex e to ``nxt[e]``) as a segment."""
-    ax, ay = x[e, 0], x[e, 1]
-    abx, aby = x[nxt[e], 0] - ax, x[nxt[e], 1] - ay
-    len2 = (0.0 + abx * abx) + aby * aby
-    t = ((0.0 + (px - ax) * abx) + (py - ay) * aby) / max(len2, 1e-300)
-    t = min(max(t, 0.0), 1.0)
-    return np.hypot(px - (ax + t * abx), py - (ay + t * aby))
 
 
 @njit(cache=True)
