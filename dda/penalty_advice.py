@@ -27,7 +27,7 @@ import warnings
 import numpy as np
 
 __all__ = ["PenaltyAdvisor", "PenaltyWarning", "soft_penalty_advice", "stiff_penalty_advice",
-           "contact_cut"]
+           "contact_cut", "natural_step"]
 
 SOFT_DEPTH = 0.05
 TARGET_DEPTH = 0.01
@@ -162,6 +162,32 @@ def stiff_penalty_advice(cuts: int, steps: int, penalty: float, mass: float, dt:
             "dominating the step.")
 
 
+def _lightest(model) -> tuple[float, int]:
+    """The lightest free block's mass at the start (kg per m) and its index."""
+    mass = model.density * model.size**2
+    light = int(np.flatnonzero(model.free)[np.argmin(mass[model.free])])
+    return float(mass[light]), light
+
+
+def natural_step(model) -> float:
+    """The step size at which the stiffest joint's normal penalty equals the lightest free
+    block's inertia: ``dt_n = sqrt(2 m / p)`` (``p = 2 m / dt_n^2``, the mass term of
+    Newmark's effective stiffness). 0 when the scene has no free block with mass.
+
+    Above it the springs dominate the step; a step far above it (a static analysis at 1 s a
+    step) may have to be cut many times before its contacts settle
+    (:class:`dda.step_control.StepControl`).
+    """
+    if not model.free.any():
+        return 0.0
+    mass, _ = _lightest(model)
+    pn = model.joints.normal_penalty
+    penalty = float(np.nanmax(pn)) if len(pn) and not np.isnan(pn).all() else 0.0
+    if mass <= 0.0 or not penalty > 0.0:
+        return 0.0
+    return math.sqrt(2.0 * mass / penalty)
+
+
 class PenaltyAdvisor:
     """Watches the committed steps of a run and warns (once each) when the penalty is wrong.
 
@@ -216,14 +242,13 @@ class PenaltyAdvisor:
 
     def _check_stiff(self, steps, contact_cuts, mean_dt):
         model = self.model
-        mass = model.density * model.size**2  # the blocks' masses at the start
-        light = int(np.flatnonzero(model.free)[np.argmin(mass[model.free])])
+        mass, light = _lightest(model)
         from dda.auto_settings import penalty_floor  # noqa: PLC0415 (it imports this module)
 
         floor, why = penalty_floor(model)
         message = stiff_penalty_advice(contact_cuts, steps,
                                        float(model.joints.normal_penalty.max()),
-                                       float(mass[light]), self.dt, model.block_label(light),
+                                       mass, self.dt, model.block_label(light),
                                        mean_dt, floor, why)
         if message:
             self.warned.add("stiff")

@@ -30,7 +30,7 @@ from dda.io.checkpoint import (
 )
 from dda.kernels import cache as kernel_cache
 from dda.model import Model
-from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning
+from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning, natural_step
 from dda.plausibility import PlausibilityWarning, check_time_step
 from dda.profiling import StepProfile
 from dda.progress import ProgressBar
@@ -207,7 +207,7 @@ class Simulation:
         if analysis == "dynamic":  # a static step solves for equilibrium: no period
             check_time_step(self.model, self.dt)
         self.committed = StepState.initial(self.model)
-        self.control = StepControl(self.dt)
+        self.control = StepControl(self.dt, natural_dt=natural_step(self.model))
         self.advisor = PenaltyAdvisor(self.model, self.dt)
         self._resume_end = None  # the end of an interrupted run (set by resume)
         self._resume_checkpoint = None

@@ -180,3 +180,16 @@ def test_a_checkpoint_from_before_the_control_remembered_its_failed_size_resumes
     assert sim.control.ceiling == 0.0
     with pytest.raises(ValueError, match="control.ceiling"):
         dda.Simulation.resume(_edit(path, lambda h: h["control"].update(ceiling="x")))
+
+
+def test_a_checkpoint_from_before_the_natural_step_resumes_with_the_scenes(tmp_path):
+    """Checkpoints written before ``StepControl.natural_dt`` existed resume with the scene's
+    natural step (:func:`dda.penalty_advice.natural_step`), as a new run has it; one that
+    is not a number is refused."""
+    path = _checkpoint(tmp_path)
+    kept = dda.Simulation.resume(path).control.natural_dt
+    assert kept > 0.0
+    sim = dda.Simulation.resume(_edit(path, lambda h: h["control"].pop("natural_dt")))
+    assert sim.control.natural_dt == kept
+    with pytest.raises(ValueError, match="control.natural_dt"):
+        dda.Simulation.resume(_edit(path, lambda h: h["control"].update(natural_dt="x")))

@@ -342,3 +342,58 @@ def test_columns_toppling_in_large_static_steps_are_not_stopped_for_their_linear
     assert sim.committed.time == pytest.approx(150 * dt)
     assert len(result.stats) > 150  # (cut steps: the columns fall over in the run)
     assert sim.committed.untracked < 1.0
+
+
+def _bolted_bar(pretension=4e4, penalty=6.8e10):
+    """A 3 x 50 cm bar standing 0.1 mm beside a 25 x 45 cm post, both 0.1 mm above a fixed
+    floor, a bolt of 4e7 N/m from the post's inside to the bar's pulling them together."""
+    rock = LinearElastic(young=1e10, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    gap, x = 1e-4, 0.25 + 1e-4
+    scene.add_block(box(-1.0, -0.5, 3.0, 0.5), rock, fixed=True, name="base")
+    scene.add_block(box(0.0, gap, 0.25, 0.45 - gap), rock, name="post")
+    scene.add_block(box(x, gap, 0.03, 0.5 - gap), rock, name="bar")
+    scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(phi=26.0)))
+    scene.add_bolt("post", (0.1, 0.2), "bar", (x + 0.015, 0.3), 4e7, pretension=pretension)
+    return scene
+
+
+def test_the_natural_step_is_where_the_stiffest_penalty_meets_the_lightest_inertia():
+    from dda.model import Model
+    from dda.penalty_advice import natural_step
+
+    model = Model(_bolted_bar())
+    mass = 0.03 * (0.5 - 1e-4) * 2500.0  # the bar, the lighter free block
+    assert natural_step(model) == pytest.approx(np.sqrt(2 * mass / 6.8e10), rel=1e-12)
+    control = dda.step_control.StepControl(1.0, natural_dt=natural_step(model))
+    assert control.cut_limit() == 12 + 15  # 1 s / 2^15 = 3.1e-5 s, below 3.3e-5 s
+    assert dda.step_control.StepControl(1e-5, natural_dt=3.3e-5).cut_limit() == 12
+    assert dda.step_control.StepControl(1.0).cut_limit() == 12
+
+
+@pytest.mark.parametrize("solver", [dda.solvers.LegacyPullBack, NewtonRaphson])
+def test_a_static_step_far_above_the_natural_step_is_cut_down_to_it_and_the_run_goes_on(
+        solver):
+    """A static analysis at 1 s a step: the bolt's 40 kN pretension pulls the 37 kg bar
+    across its 0.1 mm gap, and the contacts settle once the step is near the natural step
+    (3.3e-5 s): 2.4e-4 s, after 12 cuts. The cut limit of 12 counted from 1 s stopped the
+    run at t = 0 ("OPEN-CLOSE did not settle in 12 passes (step cut 13 times down to dt =
+    0.000488 s)", both solvers; found by the hunt's bolts-static family, seed 1263663072).
+    The run now ends at rest, the bar held by the bolt, the post and the floor."""
+    sim = dda.Simulation(_bolted_bar(), dt=1.0, solver=solver(), analysis="static")
+    result = sim.run(20.0)
+    assert sim.committed.time == pytest.approx(20.0)
+    assert result.stats["dt"].min() < 1e-3 and result.stats["dt"].max() == 1.0
+    assert sim.committed.untracked < 1.0
+    bar = result.displacement("bar")
+    assert np.abs(bar[-1] - bar[-2]).max() < 1e-9  # at rest
+    # the bar's forces balance: the bolt, the post, the floor and its weight
+    tension = result.bolt_force(0)[-1]
+    a, b = sim.committed.bolt_points[0]
+    pull = tension * (a - b) / np.linalg.norm(a - b)
+    assert 1e4 < tension < 4e4  # (it shortens as the gap closes and the post tilts)
+    post_n, post_s = result.joint_force("post", "bar")[-1]  # normal +x, shear along -y
+    floor_n, floor_s = result.joint_force("base", "bar")[-1]  # normal +y, shear along +x
+    weight = 9.81 * 2500.0 * 0.03 * (0.5 - 1e-4)
+    total = pull + [post_n + floor_s, floor_n - post_s - weight]
+    assert np.abs(total).max() < 0.01 * tension

@@ -385,9 +385,9 @@ def _control(data, initial):
 
     names = {f.name for f in fields(StepControl)}
     if isinstance(data, dict):
-        # a checkpoint written before the control remembered the size that failed, or
-        # before slip reversals were located
-        data = {"ceiling": 0.0, "reversal_wait": 0, **data}
+        # a checkpoint written before the control remembered the size that failed, before
+        # slip reversals were located, or before the natural step (the scene's, as now)
+        data = {"ceiling": 0.0, "reversal_wait": 0, "natural_dt": initial.natural_dt, **data}
     _expect(data, "control", names)
     for k, v in data.items():
         kind = type(getattr(initial, k))
