@@ -145,7 +145,7 @@ def _fan_overlap(v, gap, nx, ny, k, x, offsets, nxt, prv):
 
 @njit(cache=True)
 def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, cuts,
-                     enters, xmin, ymin, xmax, ymax):
+                     enters, xmin, ymin, xmax, ymax, shape, pile):
     """The deepest inside block k of edge v -> w's midpoint (``inside`` k at ``depth``,
     ``near`` its nearest edge, as :func:`_point_in_block` gives them; ``near`` -1: not
     probed) and the middles of the edge's stretches between its crossings with k's
@@ -165,8 +165,13 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
     the stretch). Where the midpoint is already at least half that bound deep, it stands
     for its stretch. (A midpoint that stood for its stretch by lying in k's box alone hid a
     bar laid across another with its midpoint at the other's side, 5 cm deep.)
-    ``cuts`` and ``enters``: scratch of at least k's size; k's box is ``xmin`` to ``xmax``
-    and ``ymin`` to ``ymax``."""
+    Inside a concave k (one with a reflex corner) the depth along a stretch need not be
+    concave: a bar laid through an L's inner corner is 0.5 m deep in both arms and 1 cm at
+    the corner, its stretch's middle. There the stretch is searched instead
+    (:func:`_search_stretch`).
+    ``cuts`` and ``enters``: scratch of at least k's size; ``shape``: the blocks' shapes
+    known so far (:func:`_is_concave`); ``pile``: the search's scratch
+    (:data:`SEARCH_PROBES`); k's box is ``xmin`` to ``xmax`` and ``ymin`` to ``ymax``."""
     ax, ay = x[v, 0], x[v, 1]
     dx, dy = x[w, 0] - ax, x[w, 1] - ay
     n = _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters)
@@ -203,11 +208,98 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
                 continue
         if bound <= min_depth:
             continue
+        if _is_concave(k, x, offsets, nxt, shape):
+            inside, depth, near = _search_stretch(ax, ay, dx, dy, length, t0, t1, k, x,
+                                                  offsets, nxt, inside, depth, near, bound,
+                                                  pile)
+            continue
         t = 0.5 * (t0 + t1)
         ins, dep, ne = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
         if ins and (not inside or dep > depth):
             inside, depth, near = True, dep, ne
     return inside, depth, near
+
+
+#: the most points :func:`_search_stretch` probes along one stretch
+SEARCH_PROBES = 48
+
+
+@njit(cache=True)
+def _search_stretch(ax, ay, dx, dy, length, t0, t1, k, x, offsets, nxt, inside, depth, near,
+                    bound, pile):
+    """The deepest point inside block k (any shape) of the stretch ``t0 .. t1`` of the
+    segment from (ax, ay) along (dx, dy) (``length`` long) that lies inside k, found to
+    within half its depth, where deeper than ``(inside, depth, near)`` found so far: as
+    ``(inside, depth, near)``; ``bound`` is an upper bound of the stretch's depth.
+
+    Branch and bound on the stretch's pieces. A piece from ``a`` to ``b`` (depths ``d_a``,
+    ``d_b``, nearest edges ``e_a``, ``e_b``) is no deeper than ``(d_a + d_b + |ab|) / 2``
+    (a point's depth changes no faster than the point moves), nor than ``max(d_a,
+    dist(b, e_a))`` and ``max(dist(a, e_b), d_b)`` (a point's distance to an edge is convex
+    along the segment and at least its depth). A piece whose bound is at most twice the
+    stretch's deepest point found is done; any other is halved at a probe. A stretch's ends
+    are probed where they are the segment's ends (for the bounds: a vertex is the corner
+    probe's to report); a crossing is on k's boundary, at depth 0. The search knows nothing
+    of the least depth of interest, so a caller that skips the stretches no deeper than it
+    finds exactly what a search for every depth finds deeper than it. At most
+    :data:`SEARCH_PROBES` probes; ``pile``: (2 ``SEARCH_PROBES`` + 2, 6) scratch."""
+    best = 0.0  # the stretch's deepest point found, its ends too
+    for side in range(2):  # the whole stretch: its ends in pile[0, :3] and pile[0, 3:]
+        t = t0 if side == 0 else t1
+        d, e = 0.0, -1
+        if t <= 0.0 or t >= 1.0:
+            ins, d, e = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
+            if not ins:
+                d = 0.0
+            best = max(best, d)
+        pile[0, 3 * side], pile[0, 3 * side + 1], pile[0, 3 * side + 2] = t, d, e
+    top = 1
+    probes = 0
+    while top > 0 and probes < SEARCH_PROBES:
+        top -= 1
+        ta, da, ea, tb, db, eb = (pile[top, 0], pile[top, 1], int(pile[top, 2]),
+                                  pile[top, 3], pile[top, 4], int(pile[top, 5]))
+        xa, ya, xb, yb = ax + ta * dx, ay + ta * dy, ax + tb * dx, ay + tb * dy
+        upper = min(bound, 0.5 * (da + db + (tb - ta) * length))
+        if ea >= 0:
+            upper = min(upper, max(da, _segment_distance(xb, yb, ea, x, nxt)))
+        if eb >= 0:
+            upper = min(upper, max(_segment_distance(xa, ya, eb, x, nxt), db))
+        if upper <= 2.0 * best:
+            continue
+        tm = 0.5 * (ta + tb)
+        ins, dm, em = _point_in_block(ax + tm * dx, ay + tm * dy, k, x, offsets, nxt)
+        probes += 1
+        if not ins:  # (round-off: the stretch lies inside k)
+            dm = 0.0
+        else:
+            best = max(best, dm)
+            if not inside or dm > depth:
+                inside, depth, near = True, dm, em
+        pile[top, 0], pile[top, 1], pile[top, 2] = ta, da, ea
+        pile[top, 3], pile[top, 4], pile[top, 5] = tm, dm, em
+        pile[top + 1, 0], pile[top + 1, 1], pile[top + 1, 2] = tm, dm, em
+        pile[top + 1, 3], pile[top + 1, 4], pile[top + 1, 5] = tb, db, eb
+        top += 2
+    return inside, depth, near
+
+
+@njit(cache=True)
+def _is_concave(k, x, offsets, nxt, shape):
+    """Whether block k has a reflex corner (two edges that turn clockwise by more than
+    round-off, ``1e-12`` of their lengths' product), kept in ``shape[k]`` (0: not yet
+    known, 1: convex, 2: concave) for the next call."""
+    if shape[k] == 0:
+        shape[k] = 1
+        for v in range(offsets[k], offsets[k + 1]):
+            w = nxt[v]
+            u = nxt[w]
+            ex, ey = x[w, 0] - x[v, 0], x[w, 1] - x[v, 1]
+            fx, fy = x[u, 0] - x[w, 0], x[u, 1] - x[w, 1]
+            if ex * fy - ey * fx < -1e-12 * np.hypot(ex, ey) * np.hypot(fx, fy):
+                shape[k] = 2
+                break
+    return shape[k] == 2
 
 
 @njit(cache=True)
@@ -272,6 +364,8 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
         most = max(most, offsets[b + 1] - offsets[b])
     cuts = np.empty(most)  # _deepest_stretch's scratch
     enters = np.empty(most, dtype=np.bool_)
+    pile = np.empty((2 * SEARCH_PROBES + 2, 6))
+    shape = np.zeros(offsets.shape[0] - 1, dtype=np.int8)  # _deepest_stretch's (_is_concave)
     # the edges' probes report nothing of a pair that overlaps no deeper than min_depth
     # across one of its edge normals (:func:`_thin_overlap`): two blocks pressed together
     # along a joint at an angle to the axes, whose boxes reach far into each other. Tested
@@ -309,7 +403,8 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
                         inside, depth, near = False, np.inf, -1
                     inside, depth, near = _deepest_stretch(v, w, k, x, offsets, nxt, inside,
                                                            depth, near, min_depth, cuts,
-                                                           enters, xmin, ymin, xmax, ymax)
+                                                           enters, xmin, ymin, xmax, ymax,
+                                                           shape, pile)
                 else:
                     px, py = x[v, 0], x[v, 1]
                     if not (px >= xmin and px <= xmax and py >= ymin and py <= ymax):
