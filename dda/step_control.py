@@ -3,13 +3,14 @@
 A refused step (:func:`dda.step.step`) is tried again: first with a wider contact search when
 it moved farther than predicted (at most ``max_widenings`` times), then with half the step
 size. After ``grow_after`` accepted steps in a row a cut step size doubles again, up to the
-size asked for. A step cut more than ``max_cuts`` times in a row ends the run; the cuts that
-only bring a step asked far above the scene's natural step (``natural_dt``,
-:func:`dda.penalty_advice.natural_step`) down to it do not count. A static analysis at 1 s a
-step whose light bar a bolt of 40 kN pretension pulls against a post from a 0.1 mm gap
-(``tests/test_step_control.py``) has a natural step of 3.4e-5 s: its first step settles at
-2.4e-4 s, after 12 cuts, and the run then grows its steps back to 1 s; a limit of 12 counted
-from 1 s stopped it there.
+size asked for. A step cut more than ``max_cuts`` times in a row ends the run, or, when it takes
+more, more than the cuts that bring the step asked down to ``BELOW_NATURAL`` halvings below
+the scene's natural step (``natural_dt``, :func:`dda.penalty_advice.natural_step`; there the
+lightest block's inertia is 4**8 times the stiffest spring, and contacts that do not settle
+will not settle at any dt). A static analysis at 1 s a step whose light bar a bolt of 40 kN
+pretension pulls against a post from a 0.1 mm gap (``tests/test_step_control.py``) has a
+natural step of 3.3e-5 s: its first step settles at 2.4e-4 s, after 12 cuts, and the run
+then grows its steps back to 1 s; a limit of 12 counted from 1 s stopped it there.
 
 A doubled step size that is cut again for its contacts (OPEN-CLOSE or Newton did not settle)
 before it has made ``grow_after`` steps doubles the wait before the next try (up to
@@ -38,6 +39,8 @@ from dda.penalty_advice import contact_cut
 
 __all__ = ["StepControl"]
 
+#: the halvings below the natural step a step may be cut to (see :meth:`StepControl.cut_limit`)
+BELOW_NATURAL = 8
 #: a cut try whose untracked penetration is still above this share of the try before's has
 #: not been helped by the smaller step (see :meth:`StepControl.check_can_go_on`)
 STALLED = 0.9
@@ -55,7 +58,7 @@ class StepControl:
     max_widenings : retries of one step with a wider search before dt is cut instead
     max_wait : the longest wait (accepted steps) before a cut step size is tried doubled again
     natural_dt : the scene's natural step (s; :func:`dda.penalty_advice.natural_step`, 0:
-        none): the cuts from ``dt`` down to it come on top of ``max_cuts``
+        none): a step may be cut down to ``BELOW_NATURAL`` halvings below it
     """
 
     dt: float
@@ -139,12 +142,14 @@ class StepControl:
         return self.ceiling > 0.0 and size < self.ceiling * (1.0 - 1e-9)
 
     def cut_limit(self) -> int:
-        """Cuts of one step in a row before the run stops: ``max_cuts``, and as many more as
-        halve ``dt`` down to the natural step (a step asked far above it is first cut to
-        it, and those cuts say nothing about whether the contacts can settle)."""
+        """Cuts of one step in a row before the run stops: ``max_cuts``, or those that halve
+        ``dt`` to ``BELOW_NATURAL`` halvings below the natural step if that takes more (a
+        step asked far above it is cut that far before its contacts' failing to settle says
+        anything)."""
         if self.natural_dt <= 0.0 or self.dt <= self.natural_dt:
             return self.max_cuts
-        return self.max_cuts + math.ceil(math.log2(self.dt / self.natural_dt))
+        return max(self.max_cuts,
+                   math.ceil(math.log2(self.dt / self.natural_dt)) + BELOW_NATURAL)
 
     def check_can_go_on(self, report, tries: int, dt: float, committed,
                         soft_advice=None) -> None:

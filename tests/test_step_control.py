@@ -366,9 +366,13 @@ def test_the_natural_step_is_where_the_stiffest_penalty_meets_the_lightest_inert
     mass = 0.03 * (0.5 - 1e-4) * 2500.0  # the bar, the lighter free block
     assert natural_step(model) == pytest.approx(np.sqrt(2 * mass / 6.8e10), rel=1e-12)
     control = dda.step_control.StepControl(1.0, natural_dt=natural_step(model))
-    assert control.cut_limit() == 12 + 15  # 1 s / 2^15 = 3.1e-5 s, below 3.3e-5 s
+    # 1 s / 2^15 = 3.1e-5 s is the first halving below 3.3e-5 s; then 8 more
+    assert control.cut_limit() == 15 + 8
     assert dda.step_control.StepControl(1e-5, natural_dt=3.3e-5).cut_limit() == 12
     assert dda.step_control.StepControl(1.0).cut_limit() == 12
+    # a step asked 36 times the natural step: 6 halvings to it, 8 more below, 14 in all
+    assert dda.step_control.StepControl(5e-4, natural_dt=1.4e-5).cut_limit() == 14
+    assert dda.step_control.StepControl(5e-4, natural_dt=1e-4).cut_limit() == 12
 
 
 @pytest.mark.parametrize("solver", [dda.solvers.LegacyPullBack, NewtonRaphson])
