@@ -74,6 +74,20 @@ def _point_in_block(qx, qy, k, x, offsets, nxt):
 
 
 @njit(cache=True)
+def _is_inside(qx, qy, k, x, offsets, nxt):
+    """Whether (qx, qy) lies inside block k: :func:`_point_in_block`'s even-odd rule alone."""
+    inside = False
+    for e in range(offsets[k], offsets[k + 1]):
+        f = nxt[e]
+        ax, ay = x[e, 0], x[e, 1]
+        by = x[f, 1]
+        if (ay > qy) != (by > qy):
+            if qx < ax + (qy - ay) * (x[f, 0] - ax) / (by - ay):
+                inside = not inside
+    return inside
+
+
+@njit(cache=True)
 def _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters):
     """Where the segment from (ax, ay) along (dx, dy) crosses block k's edges strictly
     between its ends: the parameters t in (0, 1) and whether it enters k there (crosses a
@@ -168,7 +182,9 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
     Inside a concave k (one with a reflex corner) the depth along a stretch need not be
     concave: a bar laid through an L's inner corner is 0.5 m deep in both arms and 1 cm at
     the corner, its stretch's middle. There the stretch is searched instead
-    (:func:`_search_stretch`).
+    (:func:`_search_stretch`), and so is an edge that lies inside it whole, without a
+    crossing (a notch above its midpoint). Where round-off breaks the alternation of
+    entries and leaves (an edge along k's collinear edges), every stretch is probed.
     ``cuts`` and ``enters``: scratch of at least k's size; ``shape``: the blocks' shapes
     known so far (:func:`_is_concave`); ``pile``: the search's scratch
     (:data:`SEARCH_PROBES`); k's box is ``xmin`` to ``xmax`` and ``ymin`` to ``ymax``."""
@@ -176,7 +192,21 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
     dx, dy = x[w, 0] - ax, x[w, 1] - ay
     n = _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters)
     if n == 0:
-        return inside, depth, near
+        # no crossing: the edge lies inside k or outside it, whole. Inside a concave k its
+        # midpoint may lie by a notch while the rest runs deep: search it
+        if (near >= 0 and not inside) or not _is_concave(k, x, offsets, nxt, shape):
+            return inside, depth, near
+        if near < 0:  # (most such edges are outside k: the even-odd rule alone first)
+            if min(max(ax, ax + dx) - xmin, max(ay, ay + dy) - ymin, xmax - min(ax, ax + dx),
+                   ymax - min(ay, ay + dy)) <= min_depth:
+                return inside, depth, near  # no deeper than its box bound
+            if not _is_inside(ax + 0.5 * dx, ay + 0.5 * dy, k, x, offsets, nxt):
+                return inside, depth, near
+            ins, dep, ne = _point_in_block(ax + 0.5 * dx, ay + 0.5 * dy, k, x, offsets, nxt)
+            if ins:
+                inside, depth, near = True, dep, ne
+        if not inside:
+            return inside, depth, near
     for i in range(1, n):  # by t, a leave before an entry at the same t (insertion: a handful)
         t, en = cuts[i], enters[i]
         j = i
@@ -185,6 +215,12 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
             cuts[j], enters[j] = cuts[j - 1], enters[j - 1]
             j -= 1
         cuts[j], enters[j] = t, en
+    # entries and leaves alternate along the edge; where round-off broke that (an edge
+    # collinear with k's edges to 1e-13 degrees crossed them at meaningless places and
+    # missed a real crossing), every stretch may be inside, and the probes decide
+    tangled = False
+    for i in range(1, n):
+        tangled = tangled or enters[i] == enters[i - 1]
     length = np.hypot(dx, dy)
     mid_near = near
     mid_inside, mid_depth = inside, depth
@@ -193,9 +229,15 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
         # end for i = n): inside k when it starts by entering or ends by leaving
         t0 = 0.0 if i == 0 else cuts[i - 1]
         t1 = 1.0 if i == n else cuts[i]
-        if not ((i > 0 and enters[i - 1]) or (i < n and not enters[i])):
+        if not (n == 0 or tangled or (i > 0 and enters[i - 1]) or (i < n and not enters[i])):
             continue
-        if (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length):
+        # a point's depth is at most its distance along the edge to a crossing (on k's
+        # boundary): half the stretch between two crossings, the whole of one that runs to
+        # the edge's end (a vertex inside k, at any depth), nothing of a whole edge
+        ends = (i > 0) + (i < n)
+        if ends == 2 and (t1 - t0) * length <= max(2.0 * min_depth, 1e-12 * length):
+            continue
+        if ends == 1 and (t1 - t0) * length <= min_depth:
             continue
         x0, y0 = ax + t0 * dx, ay + t0 * dy
         x1, y1 = ax + t1 * dx, ay + t1 * dy
@@ -236,52 +278,63 @@ def _search_stretch(ax, ay, dx, dy, length, t0, t1, k, x, offsets, nxt, inside, 
     ``d_b``, nearest edges ``e_a``, ``e_b``) is no deeper than ``(d_a + d_b + |ab|) / 2``
     (a point's depth changes no faster than the point moves), nor than ``max(d_a,
     dist(b, e_a))`` and ``max(dist(a, e_b), d_b)`` (a point's distance to an edge is convex
-    along the segment and at least its depth). A piece whose bound is at most twice the
-    stretch's deepest point found is done; any other is halved at a probe. A stretch's ends
-    are probed where they are the segment's ends (for the bounds: a vertex is the corner
-    probe's to report); a crossing is on k's boundary, at depth 0. The search knows nothing
-    of the least depth of interest, so a caller that skips the stretches no deeper than it
-    finds exactly what a search for every depth finds deeper than it. At most
-    :data:`SEARCH_PROBES` probes; ``pile``: (2 ``SEARCH_PROBES`` + 2, 6) scratch."""
-    best = 0.0  # the stretch's deepest point found, its ends too
-    for side in range(2):  # the whole stretch: its ends in pile[0, :3] and pile[0, 3:]
+    along the segment and at least its depth). The piece of the largest bound is halved at
+    a probe until no bound is above twice the deepest point probed (depth first, a saw of
+    short edges spent the probes far from a chamber: 0.034 m found of 0.50). A stretch's
+    ends are probed where they are the segment's ends, for the bounds only: the deepest
+    point is looked for between them (a vertex is the corner probe's to report, but for a
+    vertex between collinear edges, which no probe reports: counted as found, it hid a
+    stretch 0.5 m deep); a crossing is on k's boundary, at depth 0. The search knows nothing
+    of the least depth of interest. At most :data:`SEARCH_PROBES` probes; ``pile``: (2
+    ``SEARCH_PROBES`` + 2, 7) scratch, a row a piece with its bound."""
+    for side in range(2):  # the whole stretch: its ends in pile[0, :3] and pile[0, 3:6]
         t = t0 if side == 0 else t1
         d, e = 0.0, -1
         if t <= 0.0 or t >= 1.0:
             ins, d, e = _point_in_block(ax + t * dx, ay + t * dy, k, x, offsets, nxt)
             if not ins:
                 d = 0.0
-            best = max(best, d)
         pile[0, 3 * side], pile[0, 3 * side + 1], pile[0, 3 * side + 2] = t, d, e
-    top = 1
-    probes = 0
-    while top > 0 and probes < SEARCH_PROBES:
-        top -= 1
-        ta, da, ea, tb, db, eb = (pile[top, 0], pile[top, 1], int(pile[top, 2]),
-                                  pile[top, 3], pile[top, 4], int(pile[top, 5]))
-        xa, ya, xb, yb = ax + ta * dx, ay + ta * dy, ax + tb * dx, ay + tb * dy
-        upper = min(bound, 0.5 * (da + db + (tb - ta) * length))
-        if ea >= 0:
-            upper = min(upper, max(da, _segment_distance(xb, yb, ea, x, nxt)))
-        if eb >= 0:
-            upper = min(upper, max(_segment_distance(xa, ya, eb, x, nxt), db))
-        if upper <= 2.0 * best:
-            continue
-        tm = 0.5 * (ta + tb)
+    pile[0, 6] = _piece_bound(ax, ay, dx, dy, length, pile, 0, bound, x, nxt)
+    rows = 1
+    best = 0.0  # the deepest point probed inside the stretch
+    for _ in range(SEARCH_PROBES):
+        top = 0
+        for r in range(1, rows):
+            if pile[r, 6] > pile[top, 6]:
+                top = r
+        if rows == 0 or pile[top, 6] <= 2.0 * best:
+            break
+        tb, db, eb = pile[top, 3], pile[top, 4], pile[top, 5]
+        tm = 0.5 * (pile[top, 0] + tb)
         ins, dm, em = _point_in_block(ax + tm * dx, ay + tm * dy, k, x, offsets, nxt)
-        probes += 1
         if not ins:  # (round-off: the stretch lies inside k)
             dm = 0.0
         else:
             best = max(best, dm)
             if not inside or dm > depth:
                 inside, depth, near = True, dm, em
-        pile[top, 0], pile[top, 1], pile[top, 2] = ta, da, ea
+        # the piece's halves: one in its row, one in a new row
         pile[top, 3], pile[top, 4], pile[top, 5] = tm, dm, em
-        pile[top + 1, 0], pile[top + 1, 1], pile[top + 1, 2] = tm, dm, em
-        pile[top + 1, 3], pile[top + 1, 4], pile[top + 1, 5] = tb, db, eb
-        top += 2
+        pile[rows, 0], pile[rows, 1], pile[rows, 2] = tm, dm, em
+        pile[rows, 3], pile[rows, 4], pile[rows, 5] = tb, db, eb
+        pile[top, 6] = _piece_bound(ax, ay, dx, dy, length, pile, top, bound, x, nxt)
+        pile[rows, 6] = _piece_bound(ax, ay, dx, dy, length, pile, rows, bound, x, nxt)
+        rows += 1
     return inside, depth, near
+
+
+@njit(cache=True)
+def _piece_bound(ax, ay, dx, dy, length, pile, r, bound, x, nxt):
+    """The upper bound of the depth of piece ``pile[r]`` (:func:`_search_stretch`)."""
+    ta, da, ea = pile[r, 0], pile[r, 1], int(pile[r, 2])
+    tb, db, eb = pile[r, 3], pile[r, 4], int(pile[r, 5])
+    upper = min(bound, 0.5 * (da + db + (tb - ta) * length))
+    if ea >= 0:
+        upper = min(upper, max(da, _segment_distance(ax + tb * dx, ay + tb * dy, ea, x, nxt)))
+    if eb >= 0:
+        upper = min(upper, max(_segment_distance(ax + ta * dx, ay + ta * dy, eb, x, nxt), db))
+    return upper
 
 
 @njit(cache=True)
@@ -364,7 +417,7 @@ def _corners_inside_kernel(x, offsets, nxt, pairs, boxes, corner, min_depth, mid
         most = max(most, offsets[b + 1] - offsets[b])
     cuts = np.empty(most)  # _deepest_stretch's scratch
     enters = np.empty(most, dtype=np.bool_)
-    pile = np.empty((2 * SEARCH_PROBES + 2, 6))
+    pile = np.empty((2 * SEARCH_PROBES + 2, 7))
     shape = np.zeros(offsets.shape[0] - 1, dtype=np.int8)  # _deepest_stretch's (_is_concave)
     # the edges' probes report nothing of a pair that overlaps no deeper than min_depth
     # across one of its edge normals (:func:`_thin_overlap`): two blocks pressed together
