@@ -295,7 +295,7 @@ def _search_stretch(ax, ay, dx, dy, length, t0, t1, k, x, offsets, nxt, inside, 
             if not ins:
                 d = 0.0
         pile[0, 3 * side], pile[0, 3 * side + 1], pile[0, 3 * side + 2] = t, d, e
-    pile[0, 6] = _piece_bound(ax, ay, dx, dy, length, pile, 0, bound, x, nxt)
+    pile[0, 6] = _piece_bound(ax, ay, dx, dy, length, pile[0], bound, x, nxt)
     rows = 1
     best = 0.0  # the deepest point probed inside the stretch
     for _ in range(SEARCH_PROBES):
@@ -303,7 +303,7 @@ def _search_stretch(ax, ay, dx, dy, length, t0, t1, k, x, offsets, nxt, inside, 
         for r in range(1, rows):
             if pile[r, 6] > pile[top, 6]:
                 top = r
-        if rows == 0 or pile[top, 6] <= 2.0 * best:
+        if pile[top, 6] <= 2.0 * best:
             break
         tb, db, eb = pile[top, 3], pile[top, 4], pile[top, 5]
         tm = 0.5 * (pile[top, 0] + tb)
@@ -318,17 +318,17 @@ def _search_stretch(ax, ay, dx, dy, length, t0, t1, k, x, offsets, nxt, inside, 
         pile[top, 3], pile[top, 4], pile[top, 5] = tm, dm, em
         pile[rows, 0], pile[rows, 1], pile[rows, 2] = tm, dm, em
         pile[rows, 3], pile[rows, 4], pile[rows, 5] = tb, db, eb
-        pile[top, 6] = _piece_bound(ax, ay, dx, dy, length, pile, top, bound, x, nxt)
-        pile[rows, 6] = _piece_bound(ax, ay, dx, dy, length, pile, rows, bound, x, nxt)
+        pile[top, 6] = _piece_bound(ax, ay, dx, dy, length, pile[top], bound, x, nxt)
+        pile[rows, 6] = _piece_bound(ax, ay, dx, dy, length, pile[rows], bound, x, nxt)
         rows += 1
     return inside, depth, near
 
 
 @njit(cache=True)
-def _piece_bound(ax, ay, dx, dy, length, pile, r, bound, x, nxt):
-    """The upper bound of the depth of piece ``pile[r]`` (:func:`_search_stretch`)."""
-    ta, da, ea = pile[r, 0], pile[r, 1], int(pile[r, 2])
-    tb, db, eb = pile[r, 3], pile[r, 4], int(pile[r, 5])
+def _piece_bound(ax, ay, dx, dy, length, piece, bound, x, nxt):
+    """The upper bound of the depth of a piece, a row of :func:`_search_stretch`'s pile."""
+    ta, da, ea = piece[0], piece[1], int(piece[2])
+    tb, db, eb = piece[3], piece[4], int(piece[5])
     upper = min(bound, 0.5 * (da + db + (tb - ta) * length))
     if ea >= 0:
         upper = min(upper, max(da, _segment_distance(ax + tb * dx, ay + tb * dy, ea, x, nxt)))
