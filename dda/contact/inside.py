@@ -74,20 +74,6 @@ def _point_in_block(qx, qy, k, x, offsets, nxt):
 
 
 @njit(cache=True)
-def _is_inside(qx, qy, k, x, offsets, nxt):
-    """Whether (qx, qy) lies inside block k: :func:`_point_in_block`'s even-odd rule alone."""
-    inside = False
-    for e in range(offsets[k], offsets[k + 1]):
-        f = nxt[e]
-        ax, ay = x[e, 0], x[e, 1]
-        by = x[f, 1]
-        if (ay > qy) != (by > qy):
-            if qx < ax + (qy - ay) * (x[f, 0] - ax) / (by - ay):
-                inside = not inside
-    return inside
-
-
-@njit(cache=True)
 def _crossings(ax, ay, dx, dy, k, x, offsets, nxt, cuts, enters):
     """Where the segment from (ax, ay) along (dx, dy) crosses block k's edges strictly
     between its ends: the parameters t in (0, 1) and whether it enters k there (crosses a
@@ -196,12 +182,10 @@ def _deepest_stretch(v, w, k, x, offsets, nxt, inside, depth, near, min_depth, c
         # midpoint may lie by a notch while the rest runs deep: search it
         if (near >= 0 and not inside) or not _is_concave(k, x, offsets, nxt, shape):
             return inside, depth, near
-        if near < 0:  # (most such edges are outside k: the even-odd rule alone first)
+        if near < 0:
             if min(max(ax, ax + dx) - xmin, max(ay, ay + dy) - ymin, xmax - min(ax, ax + dx),
                    ymax - min(ay, ay + dy)) <= min_depth:
                 return inside, depth, near  # no deeper than its box bound
-            if not _is_inside(ax + 0.5 * dx, ay + 0.5 * dy, k, x, offsets, nxt):
-                return inside, depth, near
             ins, dep, ne = _point_in_block(ax + 0.5 * dx, ay + 0.5 * dy, k, x, offsets, nxt)
             if ins:
                 inside, depth, near = True, dep, ne
