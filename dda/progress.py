@@ -43,8 +43,10 @@ class ProgressBar:
 
     def __call__(self, state, report=None, steps: int = 1):
         """After ``steps`` committed steps (one, or a batch of :mod:`dda.compiled_run`;
-        ``report.open_close_passes`` their passes)."""
-        dt = state.time - self.last_time
+        ``report.open_close_passes`` their passes). The ``dt`` shown is a step's: the time
+        advanced over ``steps`` (a batch's steps are all of one size)."""
+        advanced = state.time - self.last_time
+        dt = advanced / max(steps, 1)
         self.last_time = state.time
         self.steps += steps
         if self.note:
@@ -58,7 +60,7 @@ class ProgressBar:
         self.bar.set_postfix_str(
             f"dt {dt:.3g} s, {len(self.stats.cuts) if self.stats is not None else 0} cut, "
             f"{self.passes / self.steps:.1f} passes/step", refresh=False)
-        self.bar.update(dt)
+        self.bar.update(advanced)
 
     def close(self):
         self.bar.close()
