@@ -106,8 +106,10 @@ class AccelerationHistory:
 
     Either a callable ``t -> (ax, ay)`` (integrated step by step with 5-point Gauss-Legendre,
     exact for polynomials of degree 9 over a step) or a sampled record ``times, values``
-    taken as piecewise linear in time and integrated exactly; a record that starts after
-    t = 0 ramps linearly from zero acceleration at t = 0.
+    taken as piecewise linear in time and integrated exactly. A record may start after t = 0
+    by at most its first sample spacing (a record whose first sample is at its time step):
+    it ramps linearly from zero acceleration at t = 0. One that starts later is refused: a
+    record in absolute times would otherwise ramp over its whole offset.
 
     A callable that is smooth only between known times (a wave switched on at ``start``, an
     amplitude that changes at some time) may list them in an attribute ``breakpoints`` (a
@@ -150,6 +152,11 @@ class AccelerationHistory:
             raise ValueError(f"{name}: the record's times must increase strictly")
         if t[0] < 0.0:
             raise ValueError(f"{name}: the record must start at t = 0, got {t[0]:g}")
+        if t[0] > 0.0 and t[0] > (t[1] - t[0]) * (1.0 + 1e-9):
+            raise ValueError(
+                f"{name}: the record starts at t = {t[0]:g} s, later than its first sample "
+                f"spacing ({t[1] - t[0]:g} s) after t = 0; shift its times to start at 0 (a "
+                "run starts at t = 0), or add a sample at t = 0")
         if t[0] > 0.0:
             t = np.concatenate([[0.0], t])
             a = np.concatenate([np.zeros((1, 2)), a])

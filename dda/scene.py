@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -14,7 +15,7 @@ from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
 from dda.errors import OverlapError
 from dda.materials import LinearElastic
-from dda.plausibility import check_gravity, check_unit_weight
+from dda.plausibility import PlausibilityWarning, check_gravity, check_unit_weight
 from dda.water import WaterTable
 
 __all__ = ["Block", "Scene", "MAX_BLOCKS", "MAX_VERTICES", "OVERLAP_TOLERANCE"]
@@ -242,6 +243,10 @@ class Scene:
         omega = finite_number("angular_velocity", angular_velocity, where=where)
         if not isinstance(rigid, (bool, np.bool_)):
             raise TypeError(f"{where}: rigid must be True or False, got {rigid!r}")
+        if fixed and (np.any(vel != 0.0) or omega != 0.0):
+            warnings.warn(f"{where}: the block is fixed, so its initial velocity is ignored "
+                          "(a moving support: Scene.prescribe_motion or Scene.shake)",
+                          PlausibilityWarning, stacklevel=2)
         self._blocks.append(_BlockInput(v, material, bool(fixed), vel, omega, bool(rigid)))
         handle = Block(index, name)
         self._handles.append(handle)
@@ -296,7 +301,9 @@ class Scene:
             A callable ``t -> (ax, ay)`` in m/s^2, or sampled values ((n,) for x only, or
             (n, 2)) at ``times``, or a pair ``(times, values)``. Records are piecewise linear.
         times : array-like, optional
-            Sample times of a recorded accelerogram (s), increasing, starting at or after 0.
+            Sample times of a recorded accelerogram (s), increasing, starting at 0, or after
+            it by at most the first sample spacing (the acceleration then ramps from zero at
+            t = 0 to the first sample).
         """
         h = self._movable(block, "shake")
         hist = AccelerationHistory(acceleration, times, name=f"shake of {h}")
@@ -346,11 +353,29 @@ class Scene:
         ----------
         block : Block, name or index
         point : (x, y)
-            Where the force acts at the start; the point then moves with the block.
+            Where the force acts at the start, inside the block or on its boundary; the
+            point then moves with the block.
         force : (fx, fy) or callable ``t -> (fx, fy)``
+
+        Raises
+        ------
+        ValueError
+            When the point lies outside the block.
+
+        A load on a fixed block moves nothing (the block is held however hard it is pushed)
+        and warns (:class:`dda.PlausibilityWarning`).
         """
         h = self.block(block)
-        p = finite_vector("point", point, where=f"point load on {h}")
+        where = f"point load on {h}"
+        p = finite_vector("point", point, where=where)
+        verts = self._blocks[h.index].vertices
+        out = outside_distance(verts, p)
+        if out > 1e-9 * float(np.ptp(verts, axis=0).max()):
+            raise ValueError(f"{where}: the point ({p[0]:g}, {p[1]:g}) is outside the block, "
+                             f"{out:.3g} m from it")
+        if self._blocks[h.index].fixed:
+            warnings.warn(f"{where}: the block is fixed, so the load moves nothing",
+                          PlausibilityWarning, stacklevel=2)
         self._loads.append(_PointLoad(h.index, p, LoadHistory(force, name=f"point load on {h}")))
 
     def add_bolt(self, block_a, point_a, block_b, point_b, stiffness: float,

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import dda
+from dda.contact import CoulombSingle, JointMaterial
 from dda.effects import AccelerationHistory
 from dda.materials import LinearElastic
 from tests.conftest import box, shaken_block_scene
@@ -29,6 +30,27 @@ def test_recorded_shake_is_exact_for_piecewise_linear():
     assert v[0] == pytest.approx(3.0, rel=1e-14)
     assert u[0] == pytest.approx(7.0 / 3.0, rel=1e-14)
     assert hist.state(0.5)[0][0] == pytest.approx(0.5**3 / 3, rel=1e-14)
+
+
+def test_a_record_whose_first_sample_is_at_its_step_ramps_from_rest():
+    """Up to its first spacing late, a record ramps from zero at t = 0: a = 2 t here."""
+    hist = AccelerationHistory(np.array([0.2, 0.4, 0.4]), np.array([0.1, 0.2, 0.3]))
+    u, v = hist.state(0.2)
+    assert v[0] == pytest.approx(0.2**2, rel=1e-14)
+    assert u[0] == pytest.approx(0.2**3 / 3, rel=1e-14)
+
+
+@pytest.mark.parametrize("start", [0.2, 10.0])
+def test_a_record_that_starts_late_is_refused(start):
+    """A record in absolute times (10 s in) was accepted and ramped over its whole offset:
+    a base under a constant 3 m/s^2 from t = 0.2 s moved 2.5 mm by t = 0.1 s."""
+    times = start + np.arange(0.0, 2.0, 0.01)
+    with pytest.raises(ValueError, match=rf"starts at t = {start:g} s.*shift its times"):
+        AccelerationHistory(np.full(len(times), 3.0), times, name="shake of block 'base'")
+    scene = dda.Scene(gravity=9.81)
+    base = scene.add_block(box(0, -0.2, 1, 0.2), ROCK, fixed=True, name="base")
+    with pytest.raises(ValueError, match="shake.*starts at"):
+        scene.shake(base, acceleration=np.full(len(times), 3.0), times=times)
 
 
 def _kinked(t):
@@ -131,6 +153,29 @@ def _spin_under_ramp_couple(dt):
     scene.add_point_load(b, point=(0.0, 0.5), force=lambda t: (-100.0 * t, 0.0))
     scene.add_point_load(b, point=(0.0, -0.5), force=lambda t: (100.0 * t, 0.0))
     return dda.Simulation(scene, dt=dt).run(duration=0.2).rotation(b)[-1]
+
+
+def test_a_point_load_outside_its_block_is_refused():
+    scene = dda.Scene(gravity=9.81)
+    base = scene.add_block(box(0, -0.2, 1, 0.2), ROCK, fixed=True, name="base")
+    top = scene.add_block(box(0.4, 0.0, 0.2, 0.2), ROCK, name="top")
+    with pytest.raises(ValueError, match=r"point load on block 'top': the point \(5, 5\) is "
+                                         r"outside the block, 6\.\d+ m from it"):
+        scene.add_point_load(top, point=(5.0, 5.0), force=(0.0, -1.0))
+    scene.add_point_load(top, point=(0.6, 0.1), force=(0.0, -1.0))  # on its boundary
+    with pytest.warns(dda.PlausibilityWarning, match="block 'base': the block is fixed"):
+        scene.add_point_load(base, point=(0.5, -0.1), force=(0.0, -1.0))
+
+
+def test_a_fixed_blocks_initial_velocity_is_ignored_with_a_warning():
+    scene = dda.Scene(gravity=None)
+    with pytest.warns(dda.PlausibilityWarning, match="fixed, so its initial velocity"):
+        wall = scene.add_block(box(0, 0, 1, 1), ROCK, fixed=True, velocity=(1.0, 0.0))
+    scene.add_block(box(3, 0, 1, 1), ROCK, velocity=(1.0, 0.0))
+    scene.set_joint(JointMaterial(normal_penalty=1e9, shear_penalty=1e9,
+                                  friction=CoulombSingle(phi=30.0)))
+    result = dda.Simulation(scene, dt=1e-2).run(0.1, progress=False)
+    assert np.all(result.displacement(wall) == 0.0)
 
 
 def test_time_dependent_point_load_spins_a_block_at_first_order():
