@@ -312,14 +312,22 @@ def test_newton_converges_quadratically_on_a_moving_edge(rotation):
 
 # --- the compiled return map ------------------------------------------------------------------
 
+#: the relative round-off the compiled and numpy return maps may differ by (a few ulp of the
+#: transcendental functions, 31 ulp = 3.4e-15 in a derivative measured)
+ROUND_OFF = 1e-13
+
+
 @pytest.mark.parametrize("options", [
     {}, {"mobilized": False}, {"slip_at_peak": 2e-4}, {"block_size": 0.5},
     {"dilation": True}, {"jrc": 0.0}, {"jrc": 18.0, "max_angle": 60.0},
 ])
 def test_compiled_return_map_is_the_numpy_one(options):
-    """dda.kernels.barton against the numpy return map, to the bit, over contacts that stick,
-    slip on every segment of Barton's table and beyond it, stand above JCS, carry no load or
-    are open, with a push either way and softening faster than the penalty."""
+    """dda.kernels.barton against the numpy return map, over contacts that stick, slip on
+    every segment of Barton's table and beyond it, stand above JCS, carry no load or are open,
+    with a push either way and softening faster than the penalty: the same decisions, and
+    the numbers to round-off. They were the same bits on machines without AVX-512; on one
+    with it numpy's vectorized ``log10``, ``tan`` and the like differ from the C library's,
+    which the kernel calls, in the last bits (3 ulp in the forces, 31 in ``ds_dk``)."""
     import dda.contact.barton as barton
 
     args = {"jrc": 10.0, "jcs": 50e6, "phi_r": 30.0} | options
@@ -349,10 +357,14 @@ def test_compiled_return_map_is_the_numpy_one(options):
         finally:
             barton.COMPILED = True
     assert 0.2 * m < numpy.slipping.sum() < m - 40
-    for name in ("t_s", "slipping", "strength"):
-        np.testing.assert_array_equal(getattr(compiled, name), getattr(numpy, name), name)
+    np.testing.assert_array_equal(compiled.slipping, numpy.slipping)
+    for name in ("t_s", "strength"):
+        np.testing.assert_allclose(getattr(compiled, name), getattr(numpy, name), rtol=ROUND_OFF,
+                                   atol=0.0, err_msg=name)
     assert compiled.state.keys() == numpy.state.keys()
     for name in numpy.state:
-        np.testing.assert_array_equal(compiled.state[name], numpy.state[name], name)
+        np.testing.assert_allclose(compiled.state[name], numpy.state[name], rtol=ROUND_OFF,
+                                   atol=0.0, err_msg=name)
     for name in ("ds_dp", "ds_dk"):
-        np.testing.assert_array_equal(compiled.extra[name], numpy.extra[name], name)
+        np.testing.assert_allclose(compiled.extra[name], numpy.extra[name], rtol=ROUND_OFF,
+                                   atol=0.0, err_msg=name)
