@@ -10,7 +10,7 @@ _kernel_cache.drop_stale_kernel_caches()  # before any kernel loads its compiled
 _kernel_cache.COLD = _kernel_cache.cold_kernel_cache()  # this process will compile them
 
 from dda import io  # noqa: E402
-from dda.errors import OverlapError  # noqa: E402
+from dda.errors import FrictionLawError, OverlapError  # noqa: E402
 from dda.io.scene_file import load_scene  # noqa: E402
 from dda.result import Result  # noqa: E402
 from dda.scene import Block, Scene  # noqa: E402
@@ -21,8 +21,8 @@ from dda.simulation import (  # noqa: E402
     SimulationError,
 )
 
-__all__ = ["Block", "OverlapError", "PenaltyWarning", "PlausibilityWarning", "Result", "Scene",
-           "Simulation", "SimulationError", "io", "load_scene"]
+__all__ = ["Block", "FrictionLawError", "OverlapError", "PenaltyWarning", "PlausibilityWarning",
+           "Result", "Scene", "Simulation", "SimulationError", "io", "load_scene"]
 __version__ = "0.1.0"
 
 

@@ -1,6 +1,6 @@
 """The errors a run raises."""
 
-__all__ = ["SimulationError", "OverlapError"]
+__all__ = ["SimulationError", "FrictionLawError", "OverlapError"]
 
 
 class SimulationError(RuntimeError):
@@ -9,6 +9,11 @@ class SimulationError(RuntimeError):
     def __init__(self, message, result=None):
         super().__init__(message)
         self.result = result
+
+
+class FrictionLawError(SimulationError):
+    """A friction law that returned a non-finite shear force or tangent from finite inputs:
+    a defect of the law, which no smaller dt mends."""
 
 
 class OverlapError(ValueError):

@@ -21,7 +21,7 @@ from dda._checks import finite_number
 from dda.auto_settings import choose
 from dda.compiled_run import StepRuns
 from dda.contact.contacts import SLIP, STICK
-from dda.errors import SimulationError
+from dda.errors import FrictionLawError, SimulationError
 from dda.io.checkpoint import (
     CHECKPOINT_VERSION,
     checkpoint_payload,
@@ -407,8 +407,13 @@ class Simulation:
         while True:
             dt = control.step_size(t_end - self.committed.time)
             with profile.active():
-                trial, report = step(self.model, self.committed, dt, self.solver, settings,
-                                     control.search_hint)
+                try:
+                    trial, report = step(self.model, self.committed, dt, self.solver,
+                                         settings, control.search_hint)
+                except FrictionLawError as exc:
+                    raise FrictionLawError(
+                        f"the run cannot go on at t = {self.committed.time:.6g} s (a step of "
+                        f"{dt:.3g} s): {exc}") from None
             if trial is not None:
                 if self.locate_reversals and self.velocity_carry > 0.0:
                     trial, report, dt = self._reversal_located(trial, report, dt, settings,

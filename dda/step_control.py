@@ -7,10 +7,12 @@ size asked for. A step cut more than ``max_cuts`` times in a row ends the run, o
 more, more than the cuts that bring the step asked down to ``BELOW_NATURAL`` halvings below
 the scene's natural step (``natural_dt``, :func:`dda.penalty_advice.natural_step`; there the
 lightest block's inertia is 4**8 times the stiffest spring, and contacts that do not settle
-will not settle at any dt). A static analysis at 1 s a step whose light bar a bolt of 40 kN
-pretension pulls against a post from a 0.1 mm gap (``tests/test_step_control.py``) has a
-natural step of 3.3e-5 s: its first step settles at 2.4e-4 s, after 12 cuts, and the run
-then grows its steps back to 1 s; a limit of 12 counted from 1 s stopped it there.
+will not settle at any dt). A try that fails below that many halvings of the step asked
+for, reached through accepted steps in between, ends the run too. A static analysis at 1 s
+a step whose light bar a bolt of 40 kN pretension pulls against a post from a 0.1 mm gap
+(``tests/test_step_control.py``) has a natural step of 3.3e-5 s: its first step settles at
+2.4e-4 s, after 12 cuts, and the run then grows its steps back to 1 s; a limit of 12 counted
+from 1 s stopped it there.
 
 A doubled step size that is cut again for its contacts (OPEN-CLOSE or Newton did not settle)
 before it has made ``grow_after`` steps doubles the wait before the next try (up to
@@ -182,11 +184,18 @@ class StepControl:
                 f"{committed.untracked:.2g} tolerances deep, untracked, at the start of "
                 f"the step{halved}, so a smaller dt cannot help ({why})"
             )
-        if tries > self.cut_limit():
+        floor = self.dt * 2.0 ** -self.cut_limit()
+        # a try below the floor, reached through steps taken in between, fails at any dt (a
+        # friction law whose slip branch is wrong let Newton-Raphson take steps of 7e-15 s,
+        # where nothing slips, and fail every try above)
+        below = dt < floor * (1.0 - 1e-9)
+        if tries > self.cut_limit() or below:
             soft = (soft_advice() if soft_advice is not None
                     and report.reason.startswith("untracked penetration") else None)
+            how = (f"step cut {tries} times down to dt = {dt:.3g} s" if tries > self.cut_limit()
+                   else f"a step of {dt:.3g} s failed, below the smallest a step is cut to, "
+                        f"{floor:.3g} s: dt / 2^{self.cut_limit()}")
             raise SimulationError(
-                f"the run cannot go on at t = {time:.6g} s: {report.reason} "
-                f"(step cut {tries} times down to dt = {dt:.3g} s"
+                f"the run cannot go on at t = {time:.6g} s: {report.reason} ({how}"
                 + ("" if soft is None else f"; the penalty is the likely cause: {soft}") + ")"
             )

@@ -24,6 +24,7 @@ from dda.contact.kinematics import (
     tributary_length,
 )
 from dda.contact.tangent import SPRING_TERMS, consistent_tangent
+from dda.errors import FrictionLawError
 from dda.kernels.dashpot import add_dashpot
 from dda.kernels.element import element_arrays
 from dda.kernels.kinematics import pair_increments as _pair_increments
@@ -155,12 +156,14 @@ class LawGroups:
             else:
                 trial = law.return_map(*args)
             t_s[idx] = trial.t_s
+            _check_finite(law, "return_map", "shear force", t_s[idx], args)
             slipping[idx] = trial.slipping
             for k, v in law.trial_history(trial).items():
                 trial_history[k][idx] = v
             if normal_penalty is not None:
                 dts_dgs[idx], dts_dgn[idx] = law.tangent(trial, normal_penalty[idx],
                                                          shear_penalty[idx])
+                _check_finite(law, "tangent", "tangent", dts_dgs[idx] + dts_dgn[idx], args)
         if normal_penalty is not None:
             return t_s, slipping, trial_history, (dts_dgs, dts_dgn)
         return t_s, slipping, trial_history
@@ -178,12 +181,43 @@ class LawGroups:
                 idx = idx[where[idx]]
                 if len(idx) == 0:
                     continue
-                trial = law.stick(self._select(history, law, idx), delta_g_s[idx],
-                                  shear_penalty[idx])
+                args = (self._select(history, law, idx), delta_g_s[idx], None,
+                        shear_penalty[idx], None)
+                trial = law.stick(*args[:2], args[3])
                 t_s[idx] = trial.t_s
+                _check_finite(law, "stick", "shear force", t_s[idx], args)
                 for k, v in law.trial_history(trial).items():
                     out[k][idx] = v
             return t_s, out
+
+
+def _check_finite(law, method: str, what: str, values: np.ndarray, args) -> None:
+    """Raise :class:`dda.errors.FrictionLawError` when ``law.method`` gave a non-finite
+    ``values`` for a contact whose inputs ``args`` (history, shear increment, normal force,
+    shear penalty, length; None where not given) are all finite: the law's defect, which a
+    smaller dt would only hide (under Newton-Raphson a law that gave NaN on its slip branch
+    took steps of 7e-15 s, where nothing slips, for ever)."""
+    bad = ~np.isfinite(values)
+    if not bad.any():
+        return
+    history, dgs, t_n, ps, length = args
+    inputs = [dgs, ps, *history.values()] + [a for a in (t_n, length) if a is not None]
+    ok = np.ones(len(values), dtype=bool)
+    for a in inputs:
+        ok &= np.isfinite(np.asarray(a, dtype=float))
+    blamed = np.flatnonzero(bad & ok)
+    if len(blamed) == 0:
+        return  # non-finite inputs: the step fails and is cut as any other
+    i = int(blamed[0])
+    state = ", ".join(f"{k} = {float(v[i]):.6g}" for k, v in history.items())
+    normal = f"t_n = {float(t_n[i]):.6g} N/m, " if t_n is not None else ""
+    name = repr(law) if repr(law).startswith(type(law).__name__) else (
+        f"{type(law).__name__} ({law!r})")
+    raise FrictionLawError(
+        f"friction law {name}: {method}() returned a non-finite {what} ({values[i]}) for "
+        f"{len(blamed)} of {len(values)} contacts from finite inputs; the first: "
+        f"{normal}shear increment {float(dgs[i]):.6g} m, shear penalty {float(ps[i]):.6g} "
+        f"N/m, history {{{state}}} (dda.contact.check_friction_law tests a law)")
 
 
 @dataclass
