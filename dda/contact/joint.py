@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from dda._checks import finite_number
 from dda.contact.friction import FrictionLaw
 
@@ -78,6 +80,14 @@ class JointMaterial:
                 "JointMaterial: friction must be a FrictionLaw such as CoulombSingle(phi=30), "
                 f"got {self.friction!r}"
             )
+        flags = [k for k, v in self.friction.history_fields().items()
+                 if not isinstance(v, (int, float, np.integer, np.floating))
+                 or isinstance(v, (bool, np.bool_))]
+        if flags:
+            raise TypeError(
+                f"JointMaterial: friction law {self.friction!r} has the history field(s) "
+                f"{flags} whose initial value is not a number; history is carried as float "
+                "arrays (keep a flag as 0.0 / 1.0)")
 
     @property
     def auto(self) -> bool:
