@@ -80,7 +80,10 @@ class JointTable:
         for law in laws:
             fields.update(law.history_fields())
         zeta = np.array([damping_ratio(j.restitution) for j in joints], dtype=float)
-        zeta_s = np.where([getattr(j, "shear_dashpot", False) for j in joints], zeta, 0.0)
+        # the shear dashpot works on the law's elastic shear displacement, ``g_se``: a law
+        # that keeps none gets no shear dashpot
+        zeta_s = np.where([getattr(j, "shear_dashpot", False)
+                           and "g_se" in j.friction.history_fields() for j in joints], zeta, 0.0)
         # "auto" penalties are NaN until the simulation chooses them (:meth:`with_penalties`)
         return cls(default, keys[order], ids[order],
                    np.array([_penalty(j.normal_penalty) for j in joints], dtype=float),

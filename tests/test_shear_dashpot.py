@@ -138,3 +138,56 @@ def test_an_impact_with_the_shear_dashpot_gains_no_energy(solver):
     w = watch(dda.Simulation(scene, dt=1e-3, solver=make_solver(solver)), duration)
     assert_no_energy_gain(w)
     assert_tracked(w)
+
+
+class ShearInU(dda.contact.FrictionLaw):
+    """Coulomb written with its elastic shear displacement in a field named ``u``, not
+    ``g_se``: a law the shear dashpot knows nothing about."""
+
+    def __init__(self, phi):
+        self.phi = phi
+        self.mu = float(np.tan(np.radians(phi)))
+
+    def __repr__(self):
+        return f"ShearInU({self.phi})"
+
+    def history_fields(self):
+        return {"u": 0.0}
+
+    def stick(self, committed, delta_g_s, shear_penalty):
+        u = committed["u"] + delta_g_s
+        n = len(u)
+        return dda.contact.FrictionTrial(shear_penalty * u, np.zeros(n, bool), np.full(n, np.inf),
+                                         {"u": u})
+
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length):
+        trial = shear_penalty * (committed["u"] + delta_g_s)
+        strength = np.maximum(-t_n, 0.0) * self.mu
+        slipping = np.abs(trial) > strength
+        t_s = np.where(slipping, strength * np.sign(trial), trial)
+        return dda.contact.FrictionTrial(t_s, slipping, strength, {"u": t_s / shear_penalty})
+
+    def tangent(self, trial, normal_penalty, shear_penalty):
+        return (np.where(trial.slipping, 0.0, shear_penalty),
+                np.where(trial.slipping, -normal_penalty * self.mu * np.sign(trial.t_s), 0.0))
+
+
+@pytest.mark.parametrize("solver", ["legacy", "newton"])
+def test_a_law_without_g_se_keeps_its_shear_force_beside_one_with_a_dashpot(solver):
+    """A block pushed at 1.02 times its strength slides with the pair's shear force at the
+    strength. A law keeping no ``g_se`` beside a joint whose law does (and its shear dashpot)
+    had its committed and recorded shear force set to zero every step: the dashpot's end
+    took the other law's zero-filled ``g_se`` for its spring."""
+    rock = dda.materials.LinearElastic(young=10e9, poisson=0.25, density=2500.0)
+    weight = 2500 * 0.5 * 9.81
+    scene = dda.Scene(gravity=9.81)
+    base = scene.add_block([(-1, -0.5), (3, -0.5), (3, 0), (-1, 0)], rock, fixed=True)
+    block = scene.add_block([(0, 0), (1, 0), (1, 0.5), (0, 0.5)], rock)
+    push = 1.02 * weight * np.tan(np.radians(30.0))
+    scene.add_point_load(block, point=(0.0, 0.1), force=(push, 0.0))
+    scene.set_joint(JointMaterial(1e10, 1e10, friction=CoulombSingle(30.0)))  # unused here
+    scene.set_joint(JointMaterial(1e10, 1e10, friction=ShearInU(30.0)), between=(base, block))
+    result = dda.Simulation(scene, dt=1e-3, solver=make_solver(solver)).run(0.2, progress=False)
+    normal, shear = result.joint_force(base, block)[-1]
+    assert normal == pytest.approx(weight, rel=1e-6)
+    assert shear == pytest.approx(-weight * np.tan(np.radians(30.0)), rel=1e-6)

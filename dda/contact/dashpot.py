@@ -169,7 +169,9 @@ def shear_dashpot_end(contacts, shear_penalty, shear_dashpot, g_se0) -> None:
     the pair's force ``p_s g_se0 + p_eff (g' - g'_0)`` being the law's (the friction force of
     a sliding contact, part of it the dashpot's). The law's plastic slip needs no change (it
     is the shear increment less the same elastic one), and an open contact keeps what its
-    law gave it.
+    law gave it, as does one without a dashpot (``c_s = 0``: its joint has none, or its law
+    keeps no ``g_se`` and so gets none; another law's zero-filled ``g_se`` there had set its
+    committed shear force to zero).
 
     Parameters
     ----------
@@ -183,7 +185,7 @@ def shear_dashpot_end(contacts, shear_penalty, shear_dashpot, g_se0) -> None:
                 a, dtype=np.float64) for a in (contacts.history["g_se"], contacts.t_s,
                                                shear_penalty, shear_dashpot, g_se0)))
         return
-    closed = contacts.state != 0
+    closed = (contacts.state != 0) & (shear_dashpot > 0.0)
     scaled0 = g_se0 * (shear_penalty / (shear_penalty + shear_dashpot))
     g_se = np.where(closed, g_se0 + (contacts.history["g_se"] - scaled0),
                     contacts.history["g_se"])

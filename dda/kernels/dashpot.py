@@ -60,12 +60,12 @@ def add_dashpot(weights, force, state, dashpot, gap0, reference, e_row):
 def shear_dashpot_ends(state, g_se, t_s, shear_penalty, shear_dashpot, g_se0):
     """:func:`dda.contact.dashpot.shear_dashpot_end`'s arithmetic: ``(g_se, t_s)`` of the
     step's contacts with the shear dashpot taken out of a closed contact's spring (new
-    arrays; an open contact keeps what its law gave it)."""
+    arrays; an open contact, and one without a dashpot, keeps what its law gave it)."""
     m = state.shape[0]
     g_out = np.empty(m)
     t_out = np.empty(m)
     for c in range(m):
-        if state[c] != 0:
+        if state[c] != 0 and shear_dashpot[c] > 0.0:
             scaled0 = g_se0[c] * (shear_penalty[c] / (shear_penalty[c] + shear_dashpot[c]))
             g_out[c] = g_se0[c] + (g_se[c] - scaled0)
             t_out[c] = shear_penalty[c] * g_out[c]
