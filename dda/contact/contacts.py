@@ -2,7 +2,9 @@
 
 A contact is identified by its (vertex, edge) pair. Its history (state, shear reference point,
 forces and the friction law's fields) follows it while the pair persists, and moves with the
-vertex when it slides onto an adjacent edge of the same block.
+vertex when it slides onto an adjacent edge of the same block; a contact that opens loses its
+forces and its law's fields, which start again from the law's initial values when it closes
+(``docs/friction_laws.md``).
 """
 
 from __future__ import annotations
