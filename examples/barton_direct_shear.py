@@ -159,7 +159,7 @@ def write_csv(runs: dict, path: Path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/barton", help="output folder (default out/barton)")
     ap.add_argument("--steps", type=int, default=200,
                     help="shear steps over the 10 mm (default 200)")

@@ -141,7 +141,7 @@ def picture(scene, blocks, ends, path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/bolted_slope", help="output folder")
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1,
                     help="processes the trials run on")

@@ -79,7 +79,7 @@ def plot(runs: list[dict], path: Path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/direct_shear", help="output folder")
     ap.add_argument("--full", action="store_true", help="also 1000 load steps")
     args = ap.parse_args(argv)

@@ -158,7 +158,7 @@ def _step(text: str):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/jointed_slope", help="output folder")
     ap.add_argument("--duration", type=float, default=0.3, help="simulated time, s")
     ap.add_argument("--dt", type=_step, default=2e-3,

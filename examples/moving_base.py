@@ -144,7 +144,7 @@ def write_outputs(runs: list[dict], out: Path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/moving_base", help="output folder")
     ap.add_argument("--duration", type=float, default=1.0, help="shaking time, s (default 1)")
     ap.add_argument("--full", action="store_true", help="3 s of shaking (six cycles)")

@@ -120,7 +120,7 @@ def plot(result, record, base, moved_in_time, path: Path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--record", help="a PEER .AT2 or K-NET / KiK-net file (default: a "
                                      "synthetic record, written to the output folder)")
     ap.add_argument("--out", default="out/recorded_shaking", help="output folder")

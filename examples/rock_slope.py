@@ -166,7 +166,7 @@ def write_csv(runs: list[dict], table, path: Path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/rock_slope", help="output folder")
     ap.add_argument("--dt", type=float, default=1e-3, help="time step, s (default 1e-3)")
     ap.add_argument("--hold", type=float, default=2.0,

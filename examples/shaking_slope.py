@@ -103,7 +103,7 @@ def plot(result, lower, upper, accel, path: Path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/demo", help="output folder (default out/demo)")
     ap.add_argument("--duration", type=float, default=6.0, help="simulated time, s")
     ap.add_argument("--dt", type=float, default=1e-3, help="time step, s")

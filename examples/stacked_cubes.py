@@ -219,7 +219,7 @@ def plot(runs: list[dict], path: Path):
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--out", default="out/stacked_cubes", help="output folder")
     ap.add_argument("--duration", type=float, default=4.0, help="shaking time, s (default 4)")
     ap.add_argument("--full", action="store_true", help="20 s of shaking")

@@ -35,7 +35,7 @@ ROWS = {
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
     ap.add_argument("--rows", type=int, choices=sorted(ROWS), default=2)
     ap.add_argument("--solver", choices=["newton", "legacy"], default="newton")
     ap.add_argument("--out", default="out/toppling_columns", help="output folder")

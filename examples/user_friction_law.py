@@ -74,8 +74,12 @@ def slide(result, scene) -> np.ndarray:
 
 
 def main(argv=None) -> dict:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=1.0)
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0].replace("\n", " "))
+    parser.add_argument("--duration", type=float, default=1.0,
+                        help="simulated time of each run, s (default 1)")
+    parser.add_argument("--out", default=None,
+                        help="a folder to write slides.csv in: each run's slide against time "
+                             "(default: none; dda run SCRIPT.py --out DIR gives one)")
     args = parser.parse_args(argv)
     brittle = BrittleCohesion(phi=30.0, cohesion=COHESION)
     check_friction_law(brittle)
@@ -94,7 +98,24 @@ def main(argv=None) -> dict:
         expected = slide_formula(name, np.asarray(t))[-1]
         print(f"  {name:8s} {how:10s} {1e3 * s[-1]:8.2f} mm   formula {1e3 * expected:8.2f} mm"
               f"   {100 * (s[-1] / expected - 1):+6.2f} %")
+    if args.out is not None:
+        _write_slides(Path(args.out) / "slides.csv", runs)
     return runs
+
+
+def _write_slides(path: Path, runs: dict) -> None:
+    """Each run's slide (m) against time (s), one column pair per run."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    columns, names = [], []
+    for (name, how), (t, s) in runs.items():
+        columns += [np.asarray(t), np.asarray(s)]
+        names += [f"t {name} {how} (s)", f"slide {name} {how} (m)"]
+    n = max(len(c) for c in columns)
+    table = np.full((n, len(columns)), np.nan)
+    for j, c in enumerate(columns):
+        table[:len(c), j] = c
+    np.savetxt(path, table, delimiter=",", header=",".join(names), comments="")
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":
