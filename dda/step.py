@@ -200,6 +200,7 @@ class _Detected:
     geometry: object
     pairs: np.ndarray
     n_pairs: int
+    new: np.ndarray | None = None  # the contacts found anew (None: as ``fresh``)
 
 
 def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
@@ -537,14 +538,14 @@ def _detect(model, state, d0, tolerance) -> _Detected:
             closed = state.contacts.state != OPEN
             cand = keep_closed(cand, state.contacts.vertex[closed], state.contacts.edge[closed],
                                state.x, topo, d0, pen_limit, model.n_blocks, sunk)
-            contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt,
-                                               topo.prv, model.n_blocks)
+            contacts, fresh, geom, new = carry_over(state.contacts, cand, state.x, topo.nxt,
+                                                    topo.prv, model.n_blocks, with_new=True)
     else:  # a single block: nothing to detect
         pairs = np.zeros((0, 2), dtype=np.int64)
         cand = CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
-        contacts, fresh, geom = carry_over(state.contacts, cand, state.x, topo.nxt, topo.prv,
-                                           model.n_blocks)
-    return _Detected(contacts, fresh, geom, pairs, cand.pairs)
+        contacts, fresh, geom, new = carry_over(state.contacts, cand, state.x, topo.nxt,
+                                                topo.prv, model.n_blocks, with_new=True)
+    return _Detected(contacts, fresh, geom, pairs, cand.pairs, new)
 
 
 def _pairs(model, boxes, margin) -> np.ndarray:
@@ -572,7 +573,8 @@ def _element(model, state, found: _Detected, ints, dt: float) -> ContactElement:
         laws = LawGroups([(model.joints.laws[0], np.arange(m))] if m else [])
     else:
         laws = LawGroups.build(model.joints.law[joint], list(model.joints.laws))
-    laws.initial_history(contacts.history, found.fresh)
+    laws.initial_history(contacts.history, found.fresh,
+                         found.fresh if found.new is None else found.new)
     pn = model.joints.normal_penalty[joint]
     if COMPILED_ELEMENT and BLOCK_KERNELS and len(contacts):
         return _compiled_element(model, state, found, ints, dt, joint, laws, pn)

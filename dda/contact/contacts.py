@@ -3,7 +3,8 @@
 A contact is identified by its (vertex, edge) pair. Its history (state, shear reference point,
 forces and the friction law's fields) follows it while the pair persists, and moves with the
 vertex when it slides onto an adjacent edge of the same block; a contact that opens loses its
-forces and its law's fields, which start again from the law's initial values when it closes
+forces and its law's fields but those its law keeps (:meth:`dda.contact.FrictionLaw.
+kept_when_open`), which start again from the law's initial values when it closes
 (``docs/friction_laws.md``).
 """
 
@@ -128,13 +129,15 @@ def _carried_whole(old, new, x, nxt):
 
 def carry_over(
     old: ContactSet, new: CandidateContacts, x: np.ndarray, nxt: np.ndarray, prv: np.ndarray,
-    n_blocks: int,
+    n_blocks: int, with_new: bool = False,
 ) -> tuple[ContactSet, np.ndarray, ContactGeometry]:
     """Build the contact set of the new detection, with the history of the old one.
 
     Returns the set, a boolean mask of the contacts that carry no history (new or open):
     the caller gives those the initial history of their friction law, and the contacts'
-    geometry at ``x`` (for :class:`dda.contact.ContactElement`).
+    geometry at ``x`` (for :class:`dda.contact.ContactElement`); ``with_new``: also a mask of
+    the contacts found anew (not carried), whose law history is all its initial one
+    (:meth:`dda.contact.FrictionLaw.kept_when_open`).
 
     A pair found again keeps everything. A vertex that was in contact with an edge and is now
     found on the adjacent edge of the same block keeps its state and history, and its shear
@@ -145,12 +148,14 @@ def carry_over(
     if m and len(old) == m and _same(old.vertex, new.vertex) and _same(old.edge, new.edge):
         # the same contacts in the same order (a scene at rest, a slow slide): each keeps all
         # it had, as the matching below would give it
-        return _carried_whole(old, new, x, nxt)
+        whole = _carried_whole(old, new, x, nxt)
+        return (*whole, np.zeros(m, dtype=bool)) if with_new else whole
     state = np.zeros(m, dtype=np.int8)
     xi0 = np.zeros(m)
     t_n = np.zeros(m)
     t_s = np.zeros(m)
     history = {k: np.zeros(m) for k in old.history}
+    found_anew = np.ones(m, dtype=bool)
     geom = new.geometry
     if geom is None:
         geom = contact_geometry(x, new.vertex, new.edge, nxt)
@@ -164,6 +169,7 @@ def carry_over(
         src = np.where(hit, order[pos], -1)
         _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom)
         carried = (src >= 0).nonzero()[0]
+        found_anew[carried] = False
         from_old = src[carried]
         state[carried] = old.state[from_old]
         t_n[carried] = old.t_n[from_old]
@@ -178,4 +184,4 @@ def carry_over(
     t_n[fresh] = 0.0
     t_s[fresh] = 0.0
     contacts = ContactSet(new.vertex, new.edge, new.bj, new.bk, state, xi0, t_n, t_s, history)
-    return contacts, fresh, geom
+    return (contacts, fresh, geom, found_anew) if with_new else (contacts, fresh, geom)

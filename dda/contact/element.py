@@ -86,14 +86,24 @@ class LawGroups:
             groups.append((laws[int(i)], np.flatnonzero(law_index == i)))
         return cls(groups)
 
-    def initial_history(self, history: dict[str, np.ndarray], mask: np.ndarray) -> None:
-        """Give the contacts in ``mask`` the initial history of their law (in place)."""
+    def initial_history(self, history: dict[str, np.ndarray], mask: np.ndarray,
+                        new: np.ndarray | None = None) -> None:
+        """Give the contacts in ``mask`` (open ones) the initial history of their law, in
+        place: all of it to those in ``new`` (found anew), and to the others the fields their
+        law does not keep while open (:meth:`dda.contact.FrictionLaw.kept_when_open`).
+        ``new`` None: no contact is new."""
         for law, idx in self.groups:
             sel = idx[mask[idx]]
             if len(sel) == 0:
                 continue
+            kept = law.kept_when_open()
             for k, v in law.initial_state(len(sel)).items():
-                history.setdefault(k, np.zeros(len(mask)))[sel] = v
+                out = history.setdefault(k, np.zeros(len(mask)))
+                if k not in kept:
+                    out[sel] = v
+                elif new is not None:
+                    fresh = new[sel]
+                    out[sel[fresh]] = np.asarray(v)[fresh]
 
     def kernel_laws(self, m: int):
         """The laws as per-contact numbers for the compiled OPEN-CLOSE pass

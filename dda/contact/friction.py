@@ -65,6 +65,17 @@ class FrictionLaw(ABC):
         """History of ``n`` contacts that have just closed."""
         return {k: np.full(n, v, dtype=float) for k, v in self.history_fields().items()}
 
+    def kept_when_open(self) -> tuple[str, ...]:
+        """The history fields a contact keeps while it is open (its vertex and edge still
+        found, and closing again), where the others start again from
+        :meth:`history_fields`: what belongs to the joint's surface rather than to the
+        spring, such as a slip-weakening law's accumulated slip. Default: none, every field
+        starts again (a slip-weakening law was back at its peak after a block's one-step
+        hop, 215 mm of slip forgotten). A contact found anew starts from
+        :meth:`history_fields` whatever this says; the elastic shear ``g_se`` is best not
+        kept (an open contact carries no force)."""
+        return ()
+
     @abstractmethod
     def return_map(
         self,

@@ -121,6 +121,9 @@ def _check_history_fields(law, n):
     state = law.initial_state(n)
     _assert(set(state) == set(fields),
             f"{law!r}: initial_state() gives {sorted(state)}, history_fields() {sorted(fields)}")
+    stray = sorted(set(law.kept_when_open()) - set(fields))
+    _assert(not stray, f"{law!r}: kept_when_open() names {stray}, which history_fields() "
+                       f"does not have ({sorted(fields)})")
     for k, v in state.items():
         v = np.asarray(v)
         _assert(v.dtype.kind == "f",
