@@ -141,7 +141,10 @@ class Simulation:
                  max_displacement_ratio: float = 0.25, penetration_tolerance: float = 0.01,
                  locate_reversals: bool | None = None):
         if not isinstance(scene, Scene):
-            raise TypeError(f"Simulation: scene must be a dda.Scene, got {scene!r}")
+            hint = ("; dda.load_scene gives a LoadedScene: pass its .scene, or call its "
+                    ".simulation() for the file's settings"
+                    if type(scene).__name__ == "LoadedScene" else "")
+            raise TypeError(f"Simulation: scene must be a dda.Scene, got {scene!r}{hint}")
         auto_dt = isinstance(dt, str)
         if auto_dt and dt != "auto":
             raise ValueError(f"Simulation: dt must be a number (s) or 'auto', got {dt!r}")

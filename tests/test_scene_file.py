@@ -437,3 +437,10 @@ def test_an_overlap_points_at_the_blocks_lines(tmp_path):
                        rf"block 'base' and block 'top' overlap at the start by 0.01 m.*"
                        rf"\('base' is at line {base - 1}\)"):
         load_scene(f)
+
+
+def test_a_loaded_scene_given_to_simulation_says_what_to_pass(tmp_path):
+    loaded = dda.load_scene(write(tmp_path, FULL))
+    with pytest.raises(TypeError, match=r"LoadedScene: pass its \.scene, or call its "
+                                        r"\.simulation\(\)"):
+        dda.Simulation(loaded, dt=1e-3)

@@ -162,7 +162,9 @@ def test_a_module_on_the_normal_path_is_found_too(tmp_path, monkeypatch):
     ('"user_laws:BrittleCohesion"', "law 'user_laws:BrittleCohesion' raised TypeError: "),
     ('"user_laws:FrictionLaw"', "raised TypeError: Can't instantiate abstract class"),
     ('"user_laws:"', "is not an import path 'module:Class'"),
-    ('"mohr", phi = 30.0', "law = 'coulomb' or 'transition' or 'barton', or an import path"),
+    ('"mohr", phi = 30.0', "law = 'mohr' is none of them: must be a table with law = "
+                           "'coulomb' or 'transition' or 'barton', or an import path"),
+    ('"colomb", phi = 30.0', "'module:Class' (did you mean 'coulomb'?)"),
 ])
 def test_import_path_errors_name_the_line_and_the_key(tmp_path, law, words):
     text = SCENE.replace('"user_laws:BrittleCohesion", phi = 30.0, cohesion = 5e4', law)

@@ -151,6 +151,7 @@ with its keyword arguments in the same table::
 from __future__ import annotations
 
 import csv
+import difflib
 import math
 import re
 import warnings
@@ -755,9 +756,12 @@ def _read_friction(r, fr, p, folder):
     names = registry.law_names()
     law = fr.get("law") if isinstance(fr, dict) else None
     if not isinstance(law, str) or (law not in names and ":" not in law):
-        raise r.error(p, "must be a table with law = "
+        given = (f"law = {law!r} is none of them: " if isinstance(law, str)
+                 else "" if law is None else f"law = {law!r} is not a name: ")
+        near = difflib.get_close_matches(law, names, n=1) if isinstance(law, str) else []
+        raise r.error(p, f"{given}must be a table with law = "
                       f"{' or '.join(repr(k) for k in names)}, or an import path "
-                      "'module:Class'")
+                      "'module:Class'" + (f" (did you mean {near[0]!r}?)" if near else ""))
     try:
         cls = registry.law_class(law, folder=folder)
     except registry.RegistryError as exc:
