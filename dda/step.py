@@ -251,6 +251,7 @@ def step(model: Model, state: StepState, dt: float, solver: NonlinearSolver,
             return done
     found = _detect(model, state, d0, settings.penetration_tolerance)
     element = _element(model, state, found, ints, dt if carry else 0.0)
+    element.laws.dt = dt  # a rate-dependent law's (FrictionLaw.uses_dt), static steps too
     problem = StepProblem(dt=dt, block_k=k_eff, block_f=f_eff, free=model.free,
                           d_known=d_known, element=element,
                           max_open_close=settings.max_open_close, rigid=model.rigid,

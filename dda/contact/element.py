@@ -74,6 +74,9 @@ class LawGroups:
 
     groups: list[tuple[FrictionLaw, np.ndarray]]
     faces: Faces | None = None
+    #: the step's size (s), given to the return map of a law that asks for it
+    #: (``FrictionLaw.uses_dt``); None: not known (a law that needs it raises)
+    dt: float | None = None
 
     @property
     def uses_faces(self) -> bool:
@@ -160,11 +163,15 @@ class LawGroups:
                 continue
             args = (self._select(history, law, idx), delta_g_s[idx], t_n[idx],
                     shear_penalty[idx], length[idx])
+            kw = {}
             if law.uses_faces:
-                faces = self.faces.subset(idx) if self.faces is not None else None
-                trial = law.return_map(*args, faces=faces)
-            else:
-                trial = law.return_map(*args)
+                kw["faces"] = self.faces.subset(idx) if self.faces is not None else None
+            if law.uses_dt:
+                if self.dt is None:
+                    raise FrictionLawError(f"friction law {law!r} needs the step's dt, which "
+                                           "this call does not know")
+                kw["dt"] = self.dt
+            trial = law.return_map(*args, **kw)
             t_s[idx] = trial.t_s
             _check_finite(law, "return_map", "shear force", t_s[idx], args)
             slipping[idx] = trial.slipping

@@ -56,6 +56,9 @@ class FrictionLaw(ABC):
     #: the law's name in scene files, sweeps and the CLI (the registry's key)
     name: str = "law"
     uses_faces: bool = False
+    #: a law whose force depends on the slip rate sets this: its ``return_map`` then also
+    #: gets ``dt=`` (the step's size, s; the slip increment over it is the rate)
+    uses_dt: bool = False
 
     def history_fields(self) -> dict[str, float]:
         """Names of the history fields and their value for a contact that has just closed."""

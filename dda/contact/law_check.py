@@ -20,6 +20,9 @@ from dda.contact.friction import FrictionLaw, FrictionTrial
 
 __all__ = ["check_friction_law"]
 
+#: the step size (s) a law that asks for one (``FrictionLaw.uses_dt``) is checked at
+CHECK_DT = 1e-3
+
 
 def check_friction_law(law, *, normal_forces=(1e2, 1e6), normal_penalty: float = 1e10,
                        shear_penalty: float = 1e9, contacts: int = 64, rtol: float = 1e-5,
@@ -104,9 +107,10 @@ def _check_untouched_contacts(law, committed, pn, ps, length):
 def _return_map(law, committed, dgs, t_n, ps, length):
     """The law's return map as the contact element calls it (no faces: each contact is its
     own face, the rule a corner contact follows)."""
-    if law.uses_faces:
-        return law.return_map(committed, dgs, t_n, ps, length, faces=None)
-    return law.return_map(committed, dgs, t_n, ps, length)
+    kw = {"faces": None} if law.uses_faces else {}
+    if law.uses_dt:
+        kw["dt"] = CHECK_DT
+    return law.return_map(committed, dgs, t_n, ps, length, **kw)
 
 
 def _assert(ok, message):
