@@ -400,4 +400,4 @@ class LoadHistory:
     def __call__(self, t: float) -> np.ndarray:
         if self._f is None:
             return self._value
-        return _as_xy(self._f(t), f"{self.name}: force(t)")
+        return _as_xy(self._f(t), f"{self.name}: force(t) at t = {t:.6g} s")

@@ -214,3 +214,13 @@ def test_a_shake_function_that_returns_no_acceleration_is_named(value, message):
     hist = AccelerationHistory(accel, name="table shake")
     with pytest.raises(ValueError, match=f"table shake: acceleration.*{message}"):
         hist.advance(hist.initial(), 0.1)
+
+
+def test_a_load_that_turns_nan_mid_run_names_the_time():
+    scene = dda.Scene(gravity=None)
+    block = scene.add_block(box(0, 0, 1, 1), ROCK, name="block")
+    scene.add_point_load(block, point=(0.5, 0.5),
+                         force=lambda t: (np.nan, 0.0) if t > 0.05 else (1.0, 0.0))
+    with pytest.raises(ValueError, match=r"point load on block 'block': force\(t\) at "
+                                         r"t = 0\.06 s returned a value that is not finite"):
+        dda.Simulation(scene, dt=1e-2).run(0.1, progress=False)
