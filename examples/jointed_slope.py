@@ -9,7 +9,9 @@ shakes horizontally at 2 Hz, 0.3 g, after 0.05 s of settling under gravity.
 With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 30 s: 1,048
 steps, 46 of them cut because OPEN-CLOSE did not settle in 30 passes, and the face blocks end
 21.94 mm (median) and 27.10 mm (most) from where they started relative to the base (36-38 s
-beside other runs on two cores, 2026-12-06). ``--solver newton``: 801 steps, 21 cut, 22.35 /
+beside other runs on two cores, 2026-12-06); on a machine with AVX-512, where numpy's
+vectorized functions round some last bits otherwise, 990 steps, 47 cut, 21.97 / 27.45 mm in
+24 s (2026-12-07). ``--solver newton``: 801 steps, 21 cut, 22.35 /
 26.52 mm (77 s beside two other runs on two cores; 38 s for 656 steps in an earlier version,
 alone). The penalty is stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x
 1.6 m block's contact period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the
