@@ -407,20 +407,23 @@ class Simulation:
         tries = widened = 0
         profile = StepProfile()
         start = _time.perf_counter()
+        short = False  # the step's first try was cut short by the run's end
         while True:
             dt = control.step_size(t_end - self.committed.time)
-            with profile.active():
-                try:
+            if tries == 0:
+                short = dt < control.dt_now * (1.0 - 1e-9)
+            try:
+                with profile.active():
                     trial, report = step(self.model, self.committed, dt, self.solver,
                                          settings, control.search_hint)
-                except FrictionLawError as exc:
-                    raise FrictionLawError(
-                        f"the run cannot go on at t = {self.committed.time:.6g} s (a step of "
-                        f"{dt:.3g} s): {exc}") from None
-            if trial is not None:
-                if self.locate_reversals and self.velocity_carry > 0.0:
+                if trial is not None and self.locate_reversals and self.velocity_carry > 0.0:
                     trial, report, dt = self._reversal_located(trial, report, dt, settings,
                                                                profile, result)
+            except FrictionLawError as exc:
+                raise FrictionLawError(
+                    f"the run cannot go on at t = {self.committed.time:.6g} s (a step of "
+                    f"{dt:.3g} s): {exc}") from None
+            if trial is not None:
                 break
             tries += 1
             if control.widen(report.search_hint, widened):  # moved farther than predicted
@@ -429,7 +432,8 @@ class Simulation:
             result.stats.cuts.append((self.committed.time, dt, report.reason))
             control.cut(dt, report.reason)
             control.check_can_go_on(report, tries, dt, self.committed,
-                                    lambda: self.advisor.soft_advice(self.committed))
+                                    lambda: self.advisor.soft_advice(self.committed),
+                                    short_step=short)
         self.committed = trial
         control.accepted()
         self.advisor.observe(trial, control.steps, control.contact_cuts)

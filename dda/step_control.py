@@ -154,13 +154,15 @@ class StepControl:
                    math.ceil(math.log2(self.dt / self.natural_dt)) + BELOW_NATURAL)
 
     def check_can_go_on(self, report, tries: int, dt: float, committed,
-                        soft_advice=None) -> None:
+                        soft_advice=None, short_step: bool = False) -> None:
         """After a cut: raise :class:`dda.SimulationError` when cutting dt further cannot
         help (``tries`` cuts of this step, the last at ``dt``, from the ``committed``
         state). ``soft_advice`` (optional, a callable) says whether the committed state's
         contact springs sink too deep (:meth:`dda.penalty_advice.PenaltyAdvisor.soft_advice`):
         an untracked penetration beside springs that sink by a large share of a block is the
-        penalty's doing, not detection's."""
+        penalty's doing, not detection's. ``short_step``: the step's first try was shorter
+        than the working size (the run's end was near), and the floor below the size asked
+        for does not apply to it (its cuts count as ever)."""
         time = committed.time
         before = getattr(self, "tried_untracked", -1.0)  # (a checkpoint from before it)
         self.tried_untracked = report.untracked
@@ -188,7 +190,7 @@ class StepControl:
         # a try below the floor, reached through steps taken in between, fails at any dt (a
         # friction law whose slip branch is wrong let Newton-Raphson take steps of 7e-15 s,
         # where nothing slips, and fail every try above)
-        below = dt < floor * (1.0 - 1e-9)
+        below = dt < floor * (1.0 - 1e-9) and not short_step
         if tries > self.cut_limit() or below:
             soft = (soft_advice() if soft_advice is not None
                     and report.reason.startswith("untracked penetration") else None)

@@ -99,7 +99,7 @@ class _Broken(CoulombSingle):
     ("never slips", "0 slipped"),
     ("stick", "stick\\(\\) and return_map\\(\\) disagree"),
     ("unpicklable", "cannot be pickled"),
-    ("over strength", "more than the strength"),
+    ("over strength", "more than its trial \\(stick spring\\) force"),
     ("pushes the slip", "friction must resist the slip"),
     ("bool history", "dtype bool; history is carried as float"),
 ])

@@ -83,3 +83,27 @@ def test_a_law_with_a_flag_for_history_is_refused_at_the_joint():
     with pytest.raises(TypeError, match=r"history field\(s\) \['broken'\] .*keep a flag as "
                                         r"0\.0 / 1\.0"):
         JointMaterial(1e9, 1e9, friction=Flagged(phi=30.0))
+
+
+def test_a_history_field_given_as_a_0d_array_is_a_number():
+    class ZeroD(CoulombSingle):
+        def history_fields(self):
+            return {"g_se": 0.0, "slip": np.asarray(0.0)}
+
+    JointMaterial(1e9, 1e9, friction=ZeroD(phi=30.0))
+
+
+def test_a_short_last_step_is_cut_as_ever_below_the_floor():
+    """A run's last step shortened to what is left (1e-8 s, below dt / 2^12) that fails is
+    cut and tried again, as before the floor; a working size below it ends the run."""
+    from types import SimpleNamespace
+
+    from dda.step_control import StepControl
+
+    report = SimpleNamespace(untracked=0.0, reason="OPEN-CLOSE did not settle in 12 passes",
+                             untracked_held=False)
+    start = SimpleNamespace(time=0.01, untracked=0.0)
+    control = StepControl(dt=1e-3)
+    control.check_can_go_on(report, 1, 1e-8, start, short_step=True)  # no error
+    with pytest.raises(dda.SimulationError, match="below the smallest a step is cut to"):
+        control.check_can_go_on(report, 1, 1e-8, start)

@@ -73,3 +73,39 @@ def test_a_block_reaches_the_terminal_velocity_of_its_viscous_joint(solver):
     assert terminal == pytest.approx(0.3044, abs=1e-4)
     assert v == pytest.approx(terminal, rel=5e-3)
     assert np.count_nonzero(result.stats["sliding"]) > 0.9 * len(result.stats)
+
+
+class ReportsYield(ViscousCoulomb):
+    """The same forces, reporting as its strength the yield check's, mu |t_n| (the
+    viscous part slides above it): a check against the reported strength refused it."""
+
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length, dt=None):
+        trial = super().return_map(committed, delta_g_s, t_n, shear_penalty, length, dt=dt)
+        trial.strength = self.mu * np.maximum(-t_n, 0.0)
+        return trial
+
+
+def test_a_law_that_slides_above_its_yield_strength_passes_the_check():
+    check_friction_law(ReportsYield(phi=25.0, eta=1e4))
+
+
+class NaNOnShortSteps(ViscousCoulomb):
+    """A defect only a step shorter than the run's dt meets (the located reversal's)."""
+
+    def return_map(self, committed, delta_g_s, t_n, shear_penalty, length, dt=None):
+        trial = super().return_map(committed, delta_g_s, t_n, shear_penalty, length, dt=dt)
+        if dt < 1.9e-3:
+            trial.t_s[:] = np.nan
+        return trial
+
+
+def test_a_law_defect_met_in_a_located_reversal_names_the_time():
+    from tests.conftest import shaken_block_scene
+
+    scene, _, _ = shaken_block_scene(phi=30, amplitude=6.0)
+    scene.set_joint(JointMaterial(1e9, 1e9, friction=NaNOnShortSteps(phi=30, eta=1e3),
+                                  restitution=1.0))
+    sim = dda.Simulation(scene, dt=2e-3, solver="newton", locate_reversals=True)
+    with pytest.raises(dda.FrictionLawError, match=r"^the run cannot go on at t = 0\.\d+ s "
+                                                   r"\(a step of 0\.002 s\): friction law"):
+        sim.run(0.6, progress=False)

@@ -81,8 +81,7 @@ class JointMaterial:
                 f"got {self.friction!r}"
             )
         flags = [k for k, v in self.friction.history_fields().items()
-                 if not isinstance(v, (int, float, np.integer, np.floating))
-                 or isinstance(v, (bool, np.bool_))]
+                 if np.asarray(v).dtype.kind not in "iuf" or np.asarray(v).ndim != 0]
         if flags:
             raise TypeError(
                 f"JointMaterial: friction law {self.friction!r} has the history field(s) "

@@ -2,7 +2,7 @@
 
 :func:`check_friction_law` samples contacts that stick and contacts that slip, fresh and with a
 history, and checks what the solvers rely on: the consistent tangent against central finite
-differences, a committed history that no trial touches, a slipping force within the strength
+differences, a committed history that no trial touches, a slipping force within its trial
 and against the slip, a stick spring that pushes back, history of float arrays, results that
 do not depend on how many contacts are evaluated together, the stick branch, a law that
 survives pickling (parallel sweeps copy it), and one rebuilt from its constructor's
@@ -201,22 +201,23 @@ def _check_stick(law, committed, dgs, t_n, ps, length, trial, fields):
 
 
 def _check_physics(law, committed, dgs, t_n, pn, ps, trial):
-    """What friction is: a slipping contact's force within the strength the law reports and
-    against the slip (the stick spring's force, the trial, gives the slip's direction), and a
+    """What friction is: a slipping contact's force no larger than its trial (the stick
+    spring's force: slip relaxes the spring, it never stretches it; a strength that rises
+    with slip or its rate stays below the trial) and of its sign (against the slip), and a
     stick spring that pushes back (d t_s / d g_s > 0). A law whose slip branch gave 1.5 times
     its strength, and one whose force pushed the slip along, passed the other checks: the
     first took Newton-Raphson to steps of 1e-7 s, the second slid a block 0.42 m down a 25
     degree slope at phi 30 degrees."""
     slipping = np.asarray(trial.slipping)
-    t_s, strength = np.asarray(trial.t_s, dtype=float), np.asarray(trial.strength, dtype=float)
-    over = slipping & (np.abs(t_s) > strength * (1.0 + 1e-9) + 1e-12 * np.abs(t_n))
+    t_s = np.asarray(trial.t_s, dtype=float)
+    t_trial = np.asarray(law.stick(committed, dgs, ps).t_s, dtype=float)
+    over = slipping & (np.abs(t_s) > np.abs(t_trial) * (1.0 + 1e-9) + 1e-12 * np.abs(t_n))
     if over.any():
         i = int(np.flatnonzero(over)[0])
         raise AssertionError(
-            f"{law!r}: a slipping contact carries {t_s[i]:.6g} N/m, more than the strength "
-            f"{strength[i]:.6g} N/m the trial reports ({np.count_nonzero(over)} of "
-            f"{len(t_s)} contacts; t_n = {t_n[i]:.4g})")
-    t_trial = np.asarray(law.stick(committed, dgs, ps).t_s, dtype=float)
+            f"{law!r}: a slipping contact carries {t_s[i]:.6g} N/m, more than its trial "
+            f"(stick spring) force {t_trial[i]:.6g} N/m: slip relaxes the spring "
+            f"({np.count_nonzero(over)} of {len(t_s)} contacts; t_n = {t_n[i]:.4g})")
     along = slipping & (t_s * t_trial < 0.0)
     if along.any():
         i = int(np.flatnonzero(along)[0])
