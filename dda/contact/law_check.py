@@ -211,27 +211,26 @@ def _check_physics(law, committed, dgs, t_n, pn, ps, trial):
     slipping = np.asarray(trial.slipping)
     t_s = np.asarray(trial.t_s, dtype=float)
     t_trial = np.asarray(law.stick(committed, dgs, ps).t_s, dtype=float)
-    over = slipping & (np.abs(t_s) > np.abs(t_trial) * (1.0 + 1e-9) + 1e-12 * np.abs(t_n))
-    if over.any():
-        i = int(np.flatnonzero(over)[0])
-        raise AssertionError(
-            f"{law!r}: a slipping contact carries {t_s[i]:.6g} N/m, more than its trial "
-            f"(stick spring) force {t_trial[i]:.6g} N/m: slip relaxes the spring "
-            f"({np.count_nonzero(over)} of {len(t_s)} contacts; t_n = {t_n[i]:.4g})")
-    along = slipping & (t_s * t_trial < 0.0)
-    if along.any():
-        i = int(np.flatnonzero(along)[0])
-        raise AssertionError(
-            f"{law!r}: a slipping contact's force {t_s[i]:.6g} N/m has the other sign than its "
-            f"trial (stick spring) force {t_trial[i]:.6g} N/m: friction must resist the slip "
-            f"({np.count_nonzero(along)} of {len(t_s)} contacts)")
     k_ss = np.asarray(law.tangent(trial, pn, ps)[0], dtype=float)
-    soft = ~slipping & ~(k_ss > 0.0)
-    if soft.any():
-        i = int(np.flatnonzero(soft)[0])
-        raise AssertionError(
-            f"{law!r}: a sticking contact's d t_s / d g_s is {k_ss[i]:.6g}; a stick spring "
-            f"pushes back (positive, the shear penalty {ps[i]:.6g} N/m for a Coulomb law)")
+    _refuse(slipping & (np.abs(t_s) > np.abs(t_trial) * (1.0 + 1e-9) + 1e-12 * np.abs(t_n)),
+            lambda i: f"{law!r}: a slipping contact carries {t_s[i]:.6g} N/m, more than its "
+                      f"trial (stick spring) force {t_trial[i]:.6g} N/m: slip relaxes the "
+                      f"spring (t_n = {t_n[i]:.4g})")
+    _refuse(slipping & (t_s * t_trial < 0.0),
+            lambda i: f"{law!r}: a slipping contact's force {t_s[i]:.6g} N/m has the other "
+                      f"sign than its trial (stick spring) force {t_trial[i]:.6g} N/m: "
+                      "friction must resist the slip")
+    _refuse(~slipping & ~(k_ss > 0.0),
+            lambda i: f"{law!r}: a sticking contact's d t_s / d g_s is {k_ss[i]:.6g}; a stick "
+                      f"spring pushes back (positive, the shear penalty {ps[i]:.6g} N/m for a "
+                      "Coulomb law)")
+
+
+def _refuse(bad: np.ndarray, message) -> None:
+    """AssertionError with ``message(i)`` of the first contact in ``bad``, and how many."""
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise AssertionError(f"{message(i)} ({np.count_nonzero(bad)} of {len(bad)} contacts)")
 
 
 def _check_tangent(law, committed, dgs, t_n, pn, ps, length, trial, rtol):
