@@ -174,6 +174,18 @@ def _field_key(names, field: str, file) -> str:
     raise ValueError(f"{file} has no block field {field!r} (there are: {', '.join(shown)})")
 
 
+def _block_fields(mesh) -> list[str]:
+    """The cell arrays of a file's block cells that hold a value on them: the contacts'
+    arrays, written NaN on the block cells, are not block fields (``dda render --field``
+    listed them among the block fields)."""
+    out = []
+    for k in mesh.cell_data.keys():
+        values = np.asarray(mesh.cell_data[k])
+        if values.dtype.kind not in "fc" or np.isfinite(values).any():
+            out.append(k)
+    return out
+
+
 def _display_unit(unit: str | None, top: float) -> tuple[str | None, float]:
     """The unit to show values up to ``top`` (in ``unit``) in, and its size in ``unit``: the
     largest whose size ``top`` reaches (mm under a metre, MPa from 1e6 Pa, ...)."""
@@ -261,7 +273,7 @@ def _colour_mesh(pv, file, field, relative_to=None):
     and what was shown: ``{"field": the array's name, "vector": whether it has components,
     "reference": block_id or None, "reference_name": its name or None}``."""
     mesh, names = _blocks_of(pv, file)
-    key = _field_key(mesh.cell_data.keys(), field, file)
+    key = _field_key(_block_fields(mesh), field, file)
     base = _split_unit(key)[0]
     if base not in _RELATIVE_FIELDS and relative_to is not None and not (
             isinstance(relative_to, str) and relative_to.strip().lower() in ("auto", "none")):

@@ -167,8 +167,13 @@ def test_frames_relative_to_a_block(series):
     assert shown[ids == 0][0] == 0.0 and shown[ids == 1][0] > 0.0
     with pytest.raises(ValueError, match="relative_to goes with"):
         _blocks_mesh(pv, last, "stress", relative_to=0)
-    with pytest.raises(ValueError, match="no block field 'strain'"):
+    with pytest.raises(ValueError, match="no block field 'strain'") as info:
         _blocks_mesh(pv, last, "strain")
+    listed = str(info.value).split("there are: ")[1]
+    assert "displacement" in listed and "stress" in listed
+    assert "normal_force" not in listed and "contact_state" not in listed  # contacts' fields
+    with pytest.raises(ValueError, match="no block field 'normal_force'"):
+        _blocks_mesh(pv, last, "normal_force")
     with pytest.raises(ValueError, match="no block with block_id 7"):
         _blocks_mesh(pv, last, "velocity", relative_to=7)
 
