@@ -612,8 +612,10 @@ class Scene:
             n = len(self._blocks)
             if len(self._joints.pairs) < n * (n - 1) // 2:
                 raise ValueError(
-                    "the scene has no default joint: call scene.set_joint(JointMaterial(...))"
-                )
+                    f"the scene has no default joint, and joints for "
+                    f"{len(self._joints.pairs)} of its {n * (n - 1) // 2} block pairs: any two "
+                    "blocks may come into contact during a run; call "
+                    "scene.set_joint(JointMaterial(...)) without between= for the others")
         verts, offsets = self.vertex_arrays()
         water = self.water
         if water is not None and not water.is_level:
@@ -629,9 +631,9 @@ class Scene:
             more = f" (and {len(bad) - 1} more pairs)" if len(bad) > 1 else ""
             raise OverlapError(
                 f"{self._handles[a]} and {self._handles[b]} overlap at the start by "
-                f"{depth:.3g} m, {depth / min(sizes):.2g} of the smaller block's size"
+                f"{depth:.3g} m, {100 * depth / min(sizes):.3g}% of the smaller block's size"
                 f"{more}; blocks may touch but not overlap (an overlap under "
-                f"{OVERLAP_TOLERANCE:g} of the smaller block's size counts as touching)",
+                f"{100 * OVERLAP_TOLERANCE:g}% of the smaller block's size counts as touching)",
                 blocks=(self._handles[a], self._handles[b]), depth=depth)
 
     def vertex_arrays(self) -> tuple[np.ndarray, np.ndarray]:

@@ -195,7 +195,7 @@ def test_overlap_message_gives_the_depth_and_the_smaller_blocks_share():
     scene = _incline_scene(shift=2e-3)
     with pytest.raises(dda.OverlapError,
                        match=r"'incline' and .*'block' overlap at the start by 0.002 m, "
-                             r"0.0015 of the smaller block's size") as info:
+                             r"0.146% of the smaller block's size") as info:
         dda.Simulation(scene, dt=1e-3)
     assert info.value.depth == pytest.approx(2e-3, rel=1e-9)
     assert [b.name for b in info.value.blocks] == ["incline", "block"]
@@ -210,7 +210,31 @@ def test_the_tolerance_follows_the_smaller_block():
         scene.add_block(box(50, 10 - 1e-7, size, size), ROCK, name="stone")
         scene.set_joint(JOINT)
         if refused:
-            with pytest.raises(ValueError, match=r"overlap at the start by 1e-07 m, 1e-05"):
+            with pytest.raises(ValueError, match=r"overlap at the start by 1e-07 m, 0.001%"):
                 dda.Simulation(scene, dt=1e-3)
         else:
             dda.Simulation(scene, dt=1e-3)
+
+
+def test_a_block_inside_another_is_measured_against_its_size_in_percent():
+    """A 0.2 m square wholly inside a 2 m one, 0.5 m from its nearest side: 250% of the
+    smaller block's size (given as a bare ratio, 2.5 read as a share)."""
+    scene = dda.Scene(gravity=9.81)
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    scene.add_block([(0, 0), (2, 0), (2, 2), (0, 2)], rock, fixed=True, name="big")
+    scene.add_block([(0.5, 0.9), (0.7, 0.9), (0.7, 1.1), (0.5, 1.1)], rock, name="small")
+    scene.set_joint(JointMaterial(1e9, 1e9, friction=CoulombSingle(phi=30.0)))
+    with pytest.raises(dda.OverlapError, match=r"by 0\.\d+ m, \d+% of the smaller block's size"):
+        dda.Simulation(scene, dt=1e-3)
+
+
+def test_no_default_joint_says_how_many_pairs_have_one():
+    scene = dda.Scene(gravity=9.81)
+    rock = LinearElastic(young=1e9, poisson=0.25, density=2500.0)
+    a = scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], rock, fixed=True)
+    b = scene.add_block([(0, 1), (1, 1), (1, 2), (0, 2)], rock)
+    scene.add_block([(3, 0), (4, 0), (4, 1), (3, 1)], rock)
+    scene.set_joint(JointMaterial(1e9, 1e9, friction=CoulombSingle(phi=30.0)), between=(a, b))
+    with pytest.raises(ValueError, match=r"no default joint, and joints for 1 of its 3 block "
+                                         r"pairs: any two blocks may come into contact"):
+        dda.Simulation(scene, dt=1e-3)
