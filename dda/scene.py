@@ -367,12 +367,7 @@ class Scene:
         """
         h = self.block(block)
         where = f"point load on {h}"
-        p = finite_vector("point", point, where=where)
-        verts = self._blocks[h.index].vertices
-        out = outside_distance(verts, p)
-        if out > 1e-9 * float(np.ptp(verts, axis=0).max()):
-            raise ValueError(f"{where}: the point ({p[0]:g}, {p[1]:g}) is outside the block, "
-                             f"{out:.3g} m from it")
+        p = self._point_on(h, "point", point, where)
         if self._blocks[h.index].fixed:
             warnings.warn(f"{where}: the block is fixed, so the load moves nothing",
                           PlausibilityWarning, stacklevel=2)
@@ -431,16 +426,8 @@ class Scene:
         if a == b:
             raise ValueError(f"{where}: block_a and block_b are the same block; a bolt joins "
                              "two blocks")
-        ends = []
-        for name, h, point in (("point_a", a, point_a), ("point_b", b, point_b)):
-            p = finite_vector(name, point, where=where)
-            verts = self._blocks[h.index].vertices
-            size = float(np.ptp(verts, axis=0).max())
-            out = outside_distance(verts, p)
-            if out > 1e-9 * size:
-                raise ValueError(f"{where}: {name} ({p[0]:g}, {p[1]:g}) is outside {h}, "
-                                 f"{out:.3g} m from it")
-            ends.append(p)
+        ends = [self._point_on(h, name, point, where)
+                for name, h, point in (("point_a", a, point_a), ("point_b", b, point_b))]
         if np.hypot(*(ends[1] - ends[0])) == 0.0:
             raise ValueError(f"{where}: point_a and point_b coincide; a bolt needs a length")
         if self._blocks[a.index].fixed and self._blocks[b.index].fixed:
@@ -455,6 +442,17 @@ class Scene:
                                  f"{strength:g} N/m")
         self._bolts.append(_Bolt(a.index, ends[0], b.index, ends[1], k, p0, strength))
         return i
+
+    def _point_on(self, h, name: str, point, where: str) -> np.ndarray:
+        """``point`` as an array, checked finite and inside block ``h`` or on its boundary
+        (within 1e-9 of its size); a ValueError names ``where`` and ``name`` otherwise."""
+        p = finite_vector(name, point, where=where)
+        verts = self._blocks[h.index].vertices
+        out = outside_distance(verts, p)
+        if out > 1e-9 * float(np.ptp(verts, axis=0).max()):
+            raise ValueError(f"{where}: {name} ({p[0]:g}, {p[1]:g}) is outside {h}, "
+                             f"{out:.3g} m from it")
+        return p
 
     def set_damping(self, mass: float = 0.0, stiffness: float = 0.0, blocks=None) -> None:
         """Viscous (Rayleigh) damping of blocks, ``C = mass * M + stiffness * K_e``.

@@ -198,11 +198,12 @@ class LawGroups:
                 idx = idx[where[idx]]
                 if len(idx) == 0:
                     continue
-                args = (self._select(history, law, idx), delta_g_s[idx], None,
-                        shear_penalty[idx], None)
-                trial = law.stick(*args[:2], args[3])
+                committed, dgs, ps = (self._select(history, law, idx), delta_g_s[idx],
+                                      shear_penalty[idx])
+                trial = law.stick(committed, dgs, ps)
                 t_s[idx] = trial.t_s
-                _check_finite(law, "stick", "shear force", t_s[idx], args)
+                _check_finite(law, "stick", "shear force", t_s[idx],
+                              (committed, dgs, None, ps, None))
                 for k, v in law.trial_history(trial).items():
                     out[k][idx] = v
             return t_s, out
