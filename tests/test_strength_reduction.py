@@ -266,6 +266,29 @@ def test_the_picture_shows_the_failing_blocks_and_the_trials(tmp_path):
     assert len(fig.axes) == 2
 
 
+def test_the_picture_shows_the_water_table_and_the_bolts(tmp_path):
+    """What holds a slope is drawn with it: the water table across the blocks and each bolt
+    from end to end (a bolted slope's picture showed neither)."""
+    pytest.importorskip("matplotlib")
+    scene, top, t = incline_scene(30.0, slope_deg=25.0)
+    scene.set_water_table([(0.0, 0.5), (2.0, 1.2), (4.0, 1.5)])
+    ends = (2.7 * t + 0.2 * np.array([-t[1], t[0]]), 2.0 * t - 0.3 * np.array([-t[1], t[0]]))
+    scene.add_bolt("top", ends[0], "base", ends[1], stiffness=1e7)
+    with ThreadPoolExecutor(2) as pool:
+        fos = dda.studies.strength_reduction(scene, executor=pool, tolerance=0.2)
+    fig = fos.picture(tmp_path / "fos.png")
+    lines = {ln.get_label(): ln for ln in fig.axes[0].get_lines()}
+    assert {"water table", "bolts"} <= set(lines)
+    x, y = lines["water table"].get_data()
+    x0, x1 = 0.0, 4.0 * np.cos(np.radians(25.0))  # the wedge's width
+    assert x[0] == pytest.approx(x0) and x[-1] == pytest.approx(x1)
+    assert y == pytest.approx(np.interp(x, [0.0, 2.0, 4.0], [0.5, 1.2, 1.5]))
+    bx, by = lines["bolts"].get_data()
+    assert np.column_stack([bx, by]) == pytest.approx(np.array(ends))
+    assert [t.get_text() for t in fig.axes[0].get_legend().get_texts()] == ["water table",
+                                                                            "bolts"]
+
+
 # ---------------------------------------------------------------------- toppling columns
 #: a 0.5 x 3 m column leaning on a 1 m square on a 25 degree base with a 0.1 m step; the
 #: columns' bases at 50 degrees (they do not slide), the joint between them at 40

@@ -1,7 +1,8 @@
 """The picture of a strength reduction (:meth:`StrengthReduction.picture`; matplotlib).
 
 Left: the scene, its failing blocks (at the smallest failed factor) in red, the other free
-blocks light, the fixed and driven ones dark. Right: every trial's movement (the largest
+blocks light, the fixed and driven ones dark, the water table (if any) in blue and the bolts
+(if any) in their starting positions as orange lines. Right: every trial's movement (the largest
 criterion ratio: 1 or more is failed) against F (movement on a log scale), stable trials as
 circles, failed ones as crosses (each at the step that stopped it: a trial ends once its
 failure is certain, so a weaker joint may show less movement), the final bracket shaded and F
@@ -40,6 +41,7 @@ def picture(fos, path=None):
                                    gridspec_kw={"width_ratios": [1.3, 1.0]})
     ax0.add_collection(PolyCollection(polygons, facecolors=list(colour), edgecolors="k",
                                       linewidths=0.5))
+    _draw_effects(ax0, scene, verts)
     ax0.autoscale_view()
     ax0.set_aspect("equal")
     ax0.set_xlabel("x (m)")
@@ -64,8 +66,24 @@ def picture(fos, path=None):
     ax1.set_ylabel("movement / threshold (failed: when stopped)")
     ax1.set_title(f"{len(fos.trials)} trials, {fos.plan.analysis}", fontsize="medium")
     ax1.legend(fontsize="small")
+    if ax0.get_legend_handles_labels()[0]:
+        ax0.legend(fontsize="small", loc="best")
     fig.tight_layout()
     if path is not None:
         fig.savefig(path)
         plt.close(fig)
     return fig
+
+
+def _draw_effects(ax, scene, verts) -> None:
+    """The scene's water table across its blocks' width and its bolts at the start: a strength
+    reduction weakens the joints, not these, so a reader should see what holds the slope."""
+    water = scene.water
+    if water is not None:
+        x0, x1 = float(verts[:, 0].min()), float(verts[:, 0].max())
+        inside = water.x[(water.x > x0) & (water.x < x1)]
+        x = np.concatenate([[x0], inside, [x1]])
+        ax.plot(x, water.head(x), color="tab:blue", lw=1.5, label="water table")
+    for k, bolt in enumerate(scene.bolts):
+        ax.plot([bolt.point_a[0], bolt.point_b[0]], [bolt.point_a[1], bolt.point_b[1]],
+                color="tab:orange", lw=1.5, label="bolts" if k == 0 else None)
