@@ -135,7 +135,7 @@ def plot(runs: list[dict], table, path: Path):
         if r["joint"] == "face" and any(q["joint"] == "transition" for q in runs):
             continue  # its rigid block is the transition's
         ax2.plot(r["time"], 1e3 * np.minimum(r["rigid"], 2 * SLOPE_STOP), "--", color=f"C{k}",
-                 lw=1, label=f"rigid block, {LABELS[r['joint']].split(',')[0]}")
+                 lw=1, label=f"rigid block (no stopper), {LABELS[r['joint']].split(',')[0]}")
     ax2.axhline(1e3 * SLOPE_STOP, color="k", ls=":", lw=1, label="stopper")
     ax2.set_ylim(-5, 1.3e3 * SLOPE_STOP)
     ax2.set_xlabel("time (s)")
