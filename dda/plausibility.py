@@ -19,8 +19,8 @@ import warnings
 import numpy as np
 
 __all__ = ["PlausibilityWarning", "check_angle", "check_density", "check_direction",
-           "check_gravity", "check_time_step", "check_unit_weight", "check_young", "YOUNG_RANGE",
-           "DENSITY_RANGE"]
+           "check_gravity", "check_rate_laws_static", "check_time_step", "check_unit_weight",
+           "check_young", "YOUNG_RANGE", "DENSITY_RANGE"]
 
 #: Young's moduli (Pa) between which no warning is given: soft soil to diamond
 YOUNG_RANGE = (1e5, 1e13)
@@ -131,3 +131,15 @@ def check_time_step(model, dt: float) -> None:
               f"2 pi sqrt(m / p) with p = {finite.max():g} N/m): its contacts cannot settle "
               f"in a step and most steps would be cut; take dt near {period:.3g} s, a softer "
               "penalty, or dt='auto'", stacklevel=4)
+
+
+def check_rate_laws_static(laws, dt: float) -> None:
+    """A rate-dependent friction law (``FrictionLaw.uses_dt``) in a static analysis: its
+    ``dt`` is the analysis's pseudo time step, so a slip "rate" and the force it gives
+    depend on how the loading was divided into steps, not on a physical time."""
+    rated = [type(law).__name__ for law in laws if getattr(law, "uses_dt", False)]
+    if rated:
+        _warn(f"Simulation: a static analysis with a rate-dependent friction law "
+              f"({', '.join(sorted(set(rated)))}, uses_dt): its return map gets the pseudo time "
+              f"step dt = {dt:g} s, so its rate term acts on slip per pseudo step, not per "
+              "second; use analysis='dynamic' for a physical rate", stacklevel=4)

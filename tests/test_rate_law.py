@@ -1,6 +1,8 @@
 """A law whose force depends on the slip rate (FrictionLaw.uses_dt): Coulomb friction plus a
 viscous term, checked and run against a block's terminal velocity on a slope."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -73,6 +75,29 @@ def test_a_block_reaches_the_terminal_velocity_of_its_viscous_joint(solver):
     assert terminal == pytest.approx(0.3044, abs=1e-4)
     assert v == pytest.approx(terminal, rel=5e-3)
     assert np.count_nonzero(result.stats["sliding"]) > 0.9 * len(result.stats)
+
+
+def test_a_static_analysis_warns_that_a_rate_law_gets_the_pseudo_time_step():
+    """A static analysis's dt is a pseudo time: a rate law's force would depend on how the
+    loading was divided into steps. Warned once, at the simulation's start; a dynamic one,
+    or a static one with rate-free laws, is not."""
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2500.0)
+
+    def scene_with(law):
+        scene = dda.Scene(gravity=9.81)
+        scene.add_block([(0, 0), (2, 0), (2, 1), (0, 1)], rock, fixed=True)
+        scene.add_block([(0.5, 1), (1.5, 1), (1.5, 1.5), (0.5, 1.5)], rock)
+        scene.set_joint(JointMaterial(1e10, 1e10, friction=law))
+        return scene
+
+    viscous = scene_with(ViscousCoulomb(phi=25.0, eta=5e3))
+    with pytest.warns(dda.PlausibilityWarning, match=r"ViscousCoulomb.*pseudo time step dt = 0.01"):
+        dda.Simulation(viscous, dt=1e-2, analysis="static")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", dda.PlausibilityWarning)
+        dda.Simulation(viscous, dt=1e-3, analysis="dynamic")
+        dda.Simulation(scene_with(dda.contact.CoulombSingle(phi=25.0)), dt=1e-2,
+                       analysis="static")
 
 
 class ReportsYield(ViscousCoulomb):
