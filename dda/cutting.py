@@ -151,7 +151,7 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
         raise ImportError("cut_blocks needs shapely: pip install 'dda[cut]'") from None
     from shapely.geometry import LineString, Polygon
     from shapely.geometry.polygon import orient
-    from shapely.ops import polygonize, unary_union
+    from shapely.ops import polygonize
 
     try:
         dom = Polygon(np.asarray(domain, dtype=float))
@@ -186,11 +186,14 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
             piece = LineString(seg).intersection(dom)
             if not piece.is_empty:
                 lines.append(piece)
-    # snap to a decimal grid far below any block: traces computed with sin and cos (a
-    # vertical set's direction is (6e-17, -1)) would leave corners 1e-17 m apart
+    # node the traces on a decimal grid far below any block: traces computed with sin and
+    # cos (a vertical set's direction is (6e-17, -1)) would leave corners 1e-17 m apart, and
+    # snapping after noding (set_precision of the union) left a trace 4e-16 m inside the
+    # boundary overlapping it unnoded, and polygonize dropped the faces beside it (a 1 m
+    # square cut by a vertical set 1 m apart gave no block at all)
     extent = max(dom.bounds[2] - dom.bounds[0], dom.bounds[3] - dom.bounds[1])
     grid = 10.0 ** (math.floor(math.log10(extent)) - 9)
-    faces = polygonize(shapely.set_precision(unary_union(lines), grid))
+    faces = polygonize(shapely.union_all(lines, grid_size=grid))
     blocks = []
     for face in shapely.get_parts(faces) if hasattr(faces, "geoms") else faces:
         if face.area <= 0.0 or not dom.contains(face.representative_point()):

@@ -48,7 +48,7 @@ block starts to slide out of the face once the base pushes into the slope at mor
 25) = 0.18 g, which 0.3 g exceeds for about 0.15 s of the run. An energy audit of the default
 run (before issue 19's changes, not redone since): the base and the back wall put 180 kJ/m into
 the blocks through their contacts, the blocks gain 110 kJ/m, and at no step do they hold more
-than they started with plus that work (``tests/stability`` checks the same on a 28-block cut,
+than they started with plus that work (``tests/stability`` checks the same on a 31-block cut,
 ``KnownMotionWork``).
 
 ``--seed N`` draws the cross joints' traces again: another cut of the same rock mass, with the

@@ -25,9 +25,9 @@ def test_a_touching_contact_does_not_cycle_until_the_pass_limit():
     assert np.max(r.stats["open_close_passes"]) <= 8
 
 
-@pytest.mark.parametrize("solver", ["legacy", "newton"])
-def test_the_shaken_cut_slope_settles_its_contacts_at_the_step_asked_for(solver):
-    """The 28-block shaken cut slope of tests/stability (0.3 s, dt 2e-3 asked for): a face
+@pytest.mark.parametrize("solver, cuts, steps", [("legacy", 6, 215), ("newton", 1, 160)])
+def test_the_shaken_cut_slope_settles_its_contacts_at_the_step_asked_for(solver, cuts, steps):
+    """The shaken cut slope of tests/stability (0.3 s, dt 2e-3 asked for): a face
     contact whose friction load opens it cycles open / closed (its lagged normal force
     oscillates: N -> a - 1.05 N), and without the cycle rule's 1% tension and the lag's
     under-relaxation OPEN-CLOSE cut 16 steps (legacy) and 14 (Newton) for not settling in
@@ -39,17 +39,23 @@ def test_the_shaken_cut_slope_settles_its_contacts_at_the_step_asked_for(solver)
     cycles pulling more than the cycle rule's 1%. Over six cuts of the same rock mass
     (``cut_blocks`` seeds 0-5, bedding offsets 0.1-0.7 m) the dashpot takes OPEN-CLOSE's cuts
     from 70 to 75 (legacy, in 1,888 and 2,363 steps) and from 54 to 71 (Newton, 1,648 and
-    1,898 steps)."""
+    1,898 steps).
+
+    The numbers above are of the 28-block scene that ``cut_blocks`` made before its noding
+    fix (three joint traces lost, three pairs of blocks merged). On the 31 blocks of the
+    rock mass cut right: 6 OPEN-CLOSE cuts in 197 steps (legacy) and none in 150 (Newton);
+    without the cycle rule and the lag's under-relaxation (``CYCLE_TENSION = 0``,
+    ``LAG_RELAX_AFTER`` never) 8 in 237 and 4 in 168."""
     scene, dt, duration, _ = scenes.shaken_cut_slope()
     scene.set_joint(replace(scene.default_joint, restitution=1.0))
     sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver), max_open_close=30)
     r = sim.run(duration, progress=False)
     open_close_cuts = [c for c in r.stats.cuts if "OPEN-CLOSE" in c[2]]
-    assert len(open_close_cuts) <= 2, open_close_cuts
-    assert len(r.stats) < 200  # it was 261 and 257 steps at the cut step sizes
+    assert len(open_close_cuts) <= cuts, open_close_cuts
+    assert len(r.stats) < steps  # 261 and 257 steps at the cut step sizes, 28 blocks
 
 
-@pytest.mark.parametrize("solver, cuts", [("legacy", 2), ("newton", 3)])
+@pytest.mark.parametrize("solver, cuts", [("legacy", 3), ("newton", 3)])
 def test_a_slip_whose_friction_load_is_zero_is_not_a_reversal(solver, cuts, monkeypatch):
     """A contact that its own friction load opens, pinned closed by the cycle rule at a
     normal force of zero, comes to the next pass sliding with a friction load of zero; Shi's
@@ -60,7 +66,9 @@ def test_a_slip_whose_friction_load_is_zero_is_not_a_reversal(solver, cuts, monk
     cut in its first 0.3 s). A load of zero has no direction: the law decides.
     The 28-block shaken cut slope with the joints' default dashpots, 0.3 s: 5 cuts in 191 steps
     (legacy) and 7 in 223 (Newton) before, 2 in 160 and 3 in 168 now, all but Newton's one at
-    its first step (dt 2e-3 asked for, held at 5e-4).
+    its first step (dt 2e-3 asked for, held at 5e-4). On the 31 blocks that ``cut_blocks``
+    gives since its noding fix (28 before: three traces lost): 3 cuts in 175 steps (legacy)
+    and none in 150 (Newton).
 
     Measured without legacy DDA's secant lag (``LAG_SECANT_FROM``), which came after and stays
     off here: with it this one cut cuts 5 steps in 190 (two at the first step, three at

@@ -42,7 +42,7 @@ def shaken_slope(penalty, dt=2e-3, duration=0.05):
 
 
 def test_a_penalty_too_stiff_for_dt_is_told_once():
-    """The 28-block shaken cut slope at 1e12 N/m (100 E) and dt 2e-3: its contacts settle
+    """The 31-block shaken cut slope at 1e12 N/m (100 E) and dt 2e-3: its contacts settle
     only at a small fraction of dt, and the step control soon waits long before it tries a
     larger one, so the cuts are few but the steps small; the warning says so.
 

@@ -74,7 +74,7 @@ def test_the_one_call_step_runs_as_the_composed_one(case, solver, monkeypatch):
     monkeypatch.setattr(step_module, "contact_step", counting)
     fast, fast_result = _run(CASES[case], solver, True, monkeypatch)
     slow, slow_result = _run(CASES[case], solver, False, monkeypatch)
-    # the fast path ran and decided steps itself (of the 28-block slope's, whose contacts
+    # the fast path ran and decided steps itself (of the 31-block slope's, whose contacts
     # change in most steps as it settles and shakes, a quarter; most steps elsewhere)
     decided = [s for s in taken if s != small_step.FALLBACK]
     assert len(decided) > 0.2 * len(fast_result.stats), (len(decided), len(taken))
