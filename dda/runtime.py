@@ -15,14 +15,25 @@ thread.
 from __future__ import annotations
 
 import functools
+import os
 import signal
 import threading
 from contextlib import contextmanager
 
 __all__ = ["BLAS_THREADS", "Interrupts", "blas_threads", "deferred_interrupts", "run_environment",
-           "sigterm_as_interrupt"]
+           "sigterm_as_interrupt", "usable_cores"]
 
 BLAS_THREADS = 1
+
+
+def usable_cores() -> int:
+    """The cores this process may run on: its CPU affinity (a batch job's allocation, a
+    ``taskset``), not the machine's count, which ``os.cpu_count()`` gives (a sweep on one core
+    of two started two workers, each then at half speed)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):  # not on Linux
+        return os.cpu_count() or 1
 
 
 @contextmanager

@@ -130,6 +130,85 @@ def test_a_failed_run_is_a_row_with_its_reason():
     assert rows[1]["status"] == "ok"
 
 
+class NoMeasure(MovingBase):
+    """The moving base whose error measure raises (a study's bug met after the run)."""
+
+    name = "no_measure"
+
+    def prepare(self, **settings):
+        sim, duration, _ = super().prepare(**settings)
+
+        def error(result):
+            raise ValueError("no slip to measure")
+
+        return sim, duration, error
+
+
+def test_a_case_that_raises_is_a_row_and_the_others_run():
+    """A negative penalty, a solver's name mistyped and an error measure that raises: each a
+    row that says so with its settings (before, the first stopped the whole sweep and the
+    rows already done were lost), the good cases run, and a warning counts them."""
+    base = MovingBase(duration=0.2)
+    cases = [Case(base, {"solver": "legacy", "dt": 1e-2, "penalty": 2e9}),
+             Case(base, {"solver": "legacy", "dt": 1e-2, "penalty": -1.0}),
+             Case(base, {"solver": "Legacy", "dt": 1e-2, "penalty": 2e9}),
+             Case(NoMeasure(duration=0.2), {"solver": "legacy", "dt": 1e-2, "penalty": 2e9})]
+    with pytest.warns(RuntimeWarning, match=r"2 of 4 cases did not run; the first, case 1 "
+                                            r"\(solver='legacy', dt=0.01, penalty=-1.0\)"):
+        rows = sweep(cases, executor=ThreadPoolExecutor(2), progress=False)
+    ok, negative, typo, measure = rows
+    assert ok["status"] == "ok" and ok["steps"] == 21
+    assert negative["status"].startswith("not run: ValueError: JointMaterial")
+    assert negative["penalty"] == -1.0 and math.isnan(negative["error"])
+    assert negative["steps"] == 0 and math.isnan(negative["cpu_time"])
+    assert typo["status"].startswith("not run:") and "'Legacy'" in typo["status"]
+    assert measure["status"] == ("ran, but its error measure raised ValueError: no slip to "
+                                 "measure")
+    assert measure["steps"] == 21 and math.isnan(measure["error"])
+    assert "not run" in str(rows)  # the table prints
+    with pytest.raises(ValueError, match="JointMaterial") as info:
+        sweep(cases[:2], executor=ThreadPoolExecutor(1), progress=False, on_error="raise")
+    assert "sweep: case 1 (solver='legacy', dt=0.01, penalty=-1.0)" in info.value.__notes__
+    with pytest.raises(ValueError, match="on_error"):
+        sweep(cases, on_error="skip")
+
+
+class Counted(MovingBase):
+    """The moving base, counting its preparations."""
+
+    name = "counted"
+    prepared: list = []
+
+    def prepare(self, **settings):
+        self.prepared.append(settings["solver"])
+        return super().prepare(**settings)
+
+
+def test_each_process_warms_its_kernels_once_per_study_and_solver(monkeypatch):
+    """The first case of each study and solver in a process first runs a few untimed steps,
+    so that loading the compiled kernels is not charged to its cpu_time (0.37 s against
+    0.006 s for the same case after it, in a fresh worker)."""
+    from dda.studies import sweep as sweep_module
+
+    monkeypatch.setattr(sweep_module, "_WARMED", set())
+    Counted.prepared.clear()
+    study = Counted(duration=0.1)
+    sweep([Case(study, {"solver": s, "dt": 1e-2, "penalty": 2e9})
+           for s in ("legacy", "legacy", "newton", "legacy", "newton")],
+          executor=ThreadPoolExecutor(1), progress=False)
+    # the warm-up prepares once more for the first legacy and the first newton case
+    assert Counted.prepared == ["legacy", "legacy", "legacy", "newton", "newton", "legacy",
+                                "newton"]
+
+
+def test_the_default_pool_uses_the_cores_the_process_may_use(monkeypatch):
+    from dda.runtime import usable_cores
+
+    monkeypatch.setattr("os.sched_getaffinity", lambda pid: {1}, raising=False)
+    monkeypatch.setattr("os.cpu_count", lambda: 64)
+    assert usable_cores() == 1
+
+
 def test_progress_bar_counts_the_cases(capsys):
     sweep(grid(MovingBase(duration=0.2), solver=["legacy"], dt=[1e-2, 2e-2]),
           executor=ThreadPoolExecutor(1), progress=True)

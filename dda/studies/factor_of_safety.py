@@ -103,7 +103,6 @@ from __future__ import annotations
 
 import copy
 import math
-import os
 import pickle
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass, field
@@ -112,6 +111,7 @@ import numpy as np
 
 from dda.errors import SimulationError
 from dda.plausibility import DT_PERIODS
+from dda.runtime import usable_cores
 from dda.simulation import Simulation
 from dda.studies.reduction import reduced_scene
 from dda.studies.sweep import Case, Study, SweepRows, make_solver, sweep
@@ -561,7 +561,7 @@ class StrengthReduction:
 def _workers(executor) -> int:
     """How many trials the executor runs at once, as far as can be told (2 if not)."""
     if executor is None:
-        return os.cpu_count() or 1
+        return usable_cores()
     n = getattr(executor, "_max_workers", None)
     if isinstance(n, int) and n > 0:
         return n
@@ -658,7 +658,7 @@ def strength_reduction(scene, executor: Executor | None = None, *,
     if own or isinstance(executor, ProcessPoolExecutor):
         _check_pickles(study)
     if own:
-        executor = ProcessPoolExecutor(max_workers=min(k, os.cpu_count() or 1))
+        executor = ProcessPoolExecutor(max_workers=min(k, usable_cores()))
     try:
         return _search(study, executor, k, lo, hi, f_min, f_max, tolerance, progress)
     finally:
@@ -685,7 +685,7 @@ def _search(study, executor, k, lo, hi, f_min, f_max, tolerance, progress):
     def run(factors, round_no):
         factors = sorted({float(f) for f in factors} - set(outcome))
         cases = [Case(study, {"factor": f}) for f in factors]
-        for r in sweep(cases, executor=executor, progress=progress):
+        for r in sweep(cases, executor=executor, progress=progress, on_error="raise"):
             r = {"round": round_no, **r}
             r.pop("study", None)
             r.pop("error", None)

@@ -30,10 +30,10 @@ import csv
 import inspect
 import itertools
 import math
-import os
 import sys
 import threading
 import time
+import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
@@ -45,7 +45,7 @@ from tqdm import tqdm
 
 from dda import registry
 from dda.profiling import SECTIONS
-from dda.runtime import blas_threads
+from dda.runtime import blas_threads, usable_cores
 from dda.simulation import Simulation, SimulationError
 
 # SOLVERS comes from the module's __getattr__ (the registry's solver names)
@@ -154,7 +154,30 @@ def run_case(case: Case) -> dict:
         return _run_case(case)
 
 
+#: steps a process runs of the first case of each study and solver before it times one: the
+#: compiled kernels load on their first call (0.37 s of CPU for the first legacy case of a
+#: fresh worker against 0.006 s for the same case next), which would be charged to that case
+WARM_UP_STEPS = 5
+#: (study, solver) pairs this process has run a warm-up for
+_WARMED: set = set()
+
+
+def _warm_up(case: Case) -> None:
+    """Run the case's simulation for :data:`WARM_UP_STEPS` steps, once per process for each
+    study and solver, untimed; a failure is left to the timed run to report."""
+    key = (type(case.study).__qualname__, case.study.name, repr(case.settings.get("solver")))
+    if key in _WARMED:
+        return
+    _WARMED.add(key)
+    try:
+        sim, duration, _ = case.study.prepare(**case.settings)
+        sim.run(min(duration, WARM_UP_STEPS * sim.dt), progress=False)
+    except Exception:  # noqa: BLE001 - the timed run meets it again and reports it
+        pass
+
+
 def _run_case(case: Case) -> dict:
+    _warm_up(case)
     sim, duration, error = case.study.prepare(**case.settings)
     clock = _cpu_clock()
     cpu0, wall0 = clock(), time.perf_counter()
@@ -166,7 +189,12 @@ def _run_case(case: Case) -> dict:
         status = f"failed at t = {sim.committed.time:.4g} s: {exc}"
     cpu = clock() - cpu0
     wall = time.perf_counter() - wall0
-    measures = error(result) if status == "ok" else {"error": math.nan}
+    measures = {"error": math.nan}
+    if status == "ok":
+        try:
+            measures = error(result)
+        except Exception as exc:  # noqa: BLE001 - the run is kept; the row says what failed
+            status = f"ran, but its error measure raised {type(exc).__name__}: {exc}"
     if not isinstance(measures, dict):
         measures = {"error": measures}
     st = result.stats
@@ -237,25 +265,34 @@ class SweepRows(list):
 
 
 def sweep(cases: Sequence[Case], executor: Executor | None = None,
-          progress: bool | None = None) -> SweepRows:
+          progress: bool | None = None, on_error: str = "row") -> SweepRows:
     """Run every case on ``executor`` and return their rows in the order of ``cases``.
 
     Parameters
     ----------
     cases : sequence of Case
     executor : concurrent.futures.Executor, optional
-        Where the runs go. Default: a process pool with one worker per core. A Dask
-        distributed client's executor (``client.get_executor()``) runs them on its cluster.
+        Where the runs go. Default: a process pool with one worker per core this process may
+        use (its CPU affinity: a batch job's allocation). A Dask distributed client's
+        executor (``client.get_executor()``) runs them on its cluster.
     progress : bool, optional
         A progress bar on stderr (cases done, the last one, elapsed and remaining time). By
         default on when stderr is a terminal.
+    on_error : {"row", "raise"}
+        What a case that raises (bad settings, a study's bug; a run that stops with
+        :class:`~dda.SimulationError` is a row either way) does: "row", the default, makes it
+        a row whose ``status`` starts "not run:" with the exception, the other cases go on,
+        and a warning at the end counts them; "raise" stops the sweep with the exception,
+        noted with the case's settings.
 
     Returns
     -------
     SweepRows
         A list of dicts (it prints as a rounded table; ``rows.to_pandas()`` is a DataFrame).
         Per case: ``study``, the settings, ``error`` (relative, NaN for a failed run),
-        ``cpu_time`` and ``wall_time`` (s, of the run alone), ``steps``, ``iterations``,
+        ``cpu_time`` and ``wall_time`` (s, of the run alone: each worker first runs
+        :data:`WARM_UP_STEPS` untimed steps of its first case of each study and solver, so
+        that loading the compiled kernels is not charged to it), ``steps``, ``iterations``,
         ``open_close_passes``, ``solves``, ``dt_cuts``, ``slip_reversals`` (steps ended at a
         slip reversal, :mod:`dda.slip_events`), ``contacts_max``, ``status`` ("ok" or
         why it stopped) and the seconds per part of the step (``detection_time`` ...).
@@ -264,32 +301,67 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
     for i, c in enumerate(cases):
         if not isinstance(c, Case):
             raise TypeError(f"sweep: case {i} is not a Case: {c!r}")
+    if on_error not in ("row", "raise"):
+        raise ValueError(f"sweep: on_error must be 'row' or 'raise', got {on_error!r}")
     if progress is None:
         progress = sys.stderr.isatty()
     own = executor is None
     if own:
-        executor = ProcessPoolExecutor(max_workers=min(len(cases), os.cpu_count() or 1) or 1)
+        executor = ProcessPoolExecutor(max_workers=min(len(cases), usable_cores()) or 1)
     rows: list[dict | None] = [None] * len(cases)
+    not_run: list[int] = []
     bar = tqdm(total=len(cases), unit="case", file=sys.stderr, disable=not progress,
                mininterval=0.0, miniters=1)  # (each case shown: they are few and slow)
     try:
         futures = {executor.submit(run_case, c): i for i, c in enumerate(cases)}
         for fut in as_completed(futures):
             i = futures[fut]
-            rows[i] = fut.result()
+            try:
+                rows[i] = fut.result()
+            except Exception as exc:
+                where = f"sweep: case {i} ({_settings_text(cases[i])})"
+                if on_error == "raise":
+                    if hasattr(exc, "add_note"):
+                        exc.add_note(where)
+                    raise
+                rows[i] = _not_run_row(cases[i], exc)
+                not_run.append(i)
             bar.set_postfix_str(_label(rows[i]), refresh=False)
             bar.update(1)
     finally:
         bar.close()
         if own:
             executor.shutdown(cancel_futures=True)
+    if not_run:
+        first = min(not_run)
+        warnings.warn(f"sweep: {len(not_run)} of {len(cases)} cases did not run; the first, "
+                      f"case {first} ({_settings_text(cases[first])}): "
+                      f"{rows[first]['status'][len('not run: '):]}", RuntimeWarning,
+                      stacklevel=2)
     return SweepRows(rows)
+
+
+def _settings_text(case: Case) -> str:
+    return ", ".join(f"{k}={v!r}" for k, v in case.settings.items()) or "no settings"
+
+
+def _not_run_row(case: Case, exc: BaseException) -> dict:
+    """The row of a case that raised before its run ended: its settings, NaN measures and
+    times, no steps, and the exception as its status."""
+    row = {"study": getattr(case.study, "name", type(case.study).__name__), **case.settings,
+           "error": math.nan, "cpu_time": math.nan, "wall_time": math.nan, "steps": 0,
+           "iterations": 0, "open_close_passes": 0, "solves": 0, "dt_cuts": 0,
+           "slip_reversals": 0, "contacts_max": 0,
+           "status": f"not run: {type(exc).__name__}: {exc}"}
+    for name in SECTIONS:
+        row[f"{name}_time"] = math.nan
+    return row
 
 
 def _label(row) -> str:
     """The settings of a case's row, short (the progress bar's last case)."""
     label = ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}"
-                      for k, v in row.items() if k not in _OUTCOME)
+                      for k, v in row.items() if k not in _OUTCOME and k != "study")
     return label[:60]
 
 
