@@ -52,6 +52,26 @@ def test_a_series_written_every_few_frames_ends_at_the_runs_end(tmp_path, rock):
     assert len(writer.files) == 5
 
 
+def test_a_run_into_an_earlier_runs_folder_leaves_one_series(tmp_path, rock):
+    """A 0.02 s run, then a 0.005 s one with the same prefix: the folder holds the second
+    run's 6 frames, not those and 15 more of the first (a *.vtu glob, or ParaView's grouped
+    series, mixed the two); a half-written file of a killed run goes too, and another
+    prefix's files stay."""
+    scene = _two_blocks(rock)
+    dda.Simulation(scene, dt=1e-3).run(0.02, output=dda.io.VTUWriter(tmp_path / "case"))
+    assert len(list(tmp_path.glob("case_*.vtu"))) == 21
+    (tmp_path / "case_00021.vtu.part").write_bytes(b"")  # a killed run's last file
+    (tmp_path / "case_00022.vtu.tmp.vtu").write_bytes(b"")  # (the name it had before)
+    (tmp_path / "case_x_00001.vtu").write_bytes(b"other")  # another prefix: "case_x"
+    (tmp_path / "case_notes.vtu").write_bytes(b"mine")
+    writer = dda.io.VTUWriter(tmp_path / "case")
+    dda.Simulation(_two_blocks(rock), dt=1e-3).run(0.005, output=writer)
+    series = sorted(p.name for p in tmp_path.glob("case_*"))
+    assert series == sorted([f.name for f in writer.files] + ["case_x_00001.vtu",
+                                                              "case_notes.vtu"])
+    assert len(writer.files) == 6
+
+
 def _two_blocks(rock):
     scene = dda.Scene(gravity=9.81)
     scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True, name="base")

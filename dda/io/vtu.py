@@ -25,13 +25,17 @@ Files are written to a temporary name and renamed, so a reader never sees half a
 .pvd index gains each frame's entry as soon as its file is in place (its closing tags
 rewritten in one write; the whole index rewritten, atomically, when it does not end as this
 writer left it and when the run ends), so the folder of a killed run opens with every frame
-but at most the last one.
+but at most the last one. A writer's first file removes the files of its prefix's series
+numbered from its own on, and half-written ones: a run into the folder of an earlier run
+with the same prefix leaves one series there, not two mixed.
 """
 
 from __future__ import annotations
 
 import base64
+import glob
 import os
+import re
 import zlib
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
@@ -158,9 +162,12 @@ class VTUWriter:
         """
         n = self._n
         if self.due(frame.time) or last:
+            if "_cleared" not in self.__dict__:
+                self._clear_stale(n)
             name = f"{self.prefix.name}_{n:05d}.vtu"
             path = self.prefix.parent / name
-            tmp = path.with_name(path.name + ".tmp.vtu")
+            # (not ending in .vtu: a file cut short by a kill must not join a *.vtu series)
+            tmp = path.with_name(path.name + ".part")
             write_vtu(tmp, frame, plain_names=self.plain_names)
             os.replace(tmp, path)
             del self._entries[n:]  # an entry left by an interrupted write
@@ -170,6 +177,19 @@ class VTUWriter:
             self._index_last()
             return
         self.skip(frame.time)
+
+    def _clear_stale(self, n: int) -> None:
+        """Remove this prefix's series files numbered ``n`` and up, and half-written ones:
+        an earlier run's (or an interrupted run's beyond its checkpoint), which a
+        ``PREFIX_*.vtu`` glob or ParaView's grouped file series would mix into this one (a
+        0.1 s run into the folder of a 0.4 s one left 150 of its frames there). Once per
+        writer and process, at its first file."""
+        self._cleared = True
+        pattern = re.compile(re.escape(self.prefix.name) + r"_(\d{5,})\.vtu(\.part|\.tmp\.vtu)?")
+        for path in self.prefix.parent.glob(f"{glob.escape(self.prefix.name)}_*"):
+            match = pattern.fullmatch(path.name)
+            if match and (match.group(2) or int(match.group(1)) >= n):
+                path.unlink(missing_ok=True)
 
     def due(self, time: float) -> bool:
         """Whether :meth:`write` would write a file for a frame at ``time`` (s) given now
@@ -202,6 +222,7 @@ class VTUWriter:
     def __getstate__(self):
         state = self.__dict__.copy()
         state.pop("_pvd_end", None)  # where this process left the index: not for a resume
+        state.pop("_cleared", None)  # a resumed run clears what lies beyond its checkpoint
         return state
 
     def _index_last(self):
