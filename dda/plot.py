@@ -145,8 +145,9 @@ def _pyvista():
 _RELATIVE_FIELDS = ("displacement", "velocity", "rotation")
 _NOT_SHOWN = ("kind", "vtkOriginalCellIds", "block_id", "shaken", "vertex_block", "edge_block")
 #: the units a colour bar may show a quantity in, for each unit of the files
-_DISPLAY_UNITS = {"m": (("mm", 1e-3), ("m", 1.0)), "m/s": (("mm/s", 1e-3), ("m/s", 1.0)),
-                  "rad": (("mrad", 1e-3), ("rad", 1.0)),
+_DISPLAY_UNITS = {"m": (("µm", 1e-6), ("mm", 1e-3), ("m", 1.0)),
+                  "m/s": (("µm/s", 1e-6), ("mm/s", 1e-3), ("m/s", 1.0)),
+                  "rad": (("µrad", 1e-6), ("mrad", 1e-3), ("rad", 1.0)),
                   "Pa": (("Pa", 1.0), ("kPa", 1e3), ("MPa", 1e6), ("GPa", 1e9)),
                   "N/m": (("N/m", 1.0), ("kN/m", 1e3), ("MN/m", 1e6))}
 
@@ -329,15 +330,22 @@ class _Frames:
         self.pv = _pyvista()
         self.field = field
         self.relative_to = relative_to
-        lo, hi, top = np.full(3, np.inf), np.full(3, -np.inf), -np.inf
+        lo, hi, low, top = np.full(3, np.inf), np.full(3, -np.inf), np.inf, -np.inf
         for f in dict.fromkeys(files):  # each file once, read one at a time
             m, info = _colour_mesh(self.pv, f, field, relative_to)
             lo = np.minimum(lo, m.bounds[::2])
             hi = np.maximum(hi, m.bounds[1::2])
+            low = min(low, float(np.nanmin(m.cell_data["shown"])))
             top = max(top, float(np.nanmax(m.cell_data["shown"])))
         base, unit = _split_unit(info["field"])
-        self.unit, self.scale = _display_unit(unit, top)
-        self.clim = (0.0, top / self.scale if top > 0 else 1.0)
+        # a signed quantity (a rotation, a stress component) on a diverging map centred on
+        # 0: a range from 0 up drew every clockwise rotation as the fixed base's 0
+        self.signed = low < 0.0
+        peak = max(-low, top) if self.signed else top
+        self.unit, self.scale = _display_unit(unit, peak)
+        span = peak / self.scale if peak > 0 else 1.0
+        self.clim = (-span, span) if self.signed else (0.0, span)
+        self.cmap = "coolwarm" if self.signed else "viridis"
         self.size = tuple(int(s) for s in size)
         quantity = f"|{base}|" if info["vector"] else base
         if info["reference"] is not None:
@@ -371,14 +379,20 @@ class _Frames:
         """The blocks alone, (height, width, 3) pixels covering :attr:`extent`."""
         pv = self.pv
         mesh = self.mesh(file)
-        p = pv.Plotter(off_screen=True, window_size=self.pixels)
-        p.set_background("white")
-        p.add_mesh(mesh, scalars="shown", clim=self.clim, cmap="viridis", show_scalar_bar=False)
-        # the polygons' own edges (show_edges would draw the triangles they render as)
-        p.add_mesh(mesh.extract_all_edges(), color="black", line_width=1)
         x0, x1, y0, y1 = self.extent
         cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
-        p.camera_position = [(cx, cy, 1.0), (cx, cy, 0.0), (0.0, 1.0, 0.0)]
+        # drawn about the picture's centre: VTK renders in single precision, and at a site's
+        # coordinates (y = 4e6 m) the outlines sat 5 cm off their faces
+        mesh.points = mesh.points - np.array([cx, cy, 0.0])
+        p = pv.Plotter(off_screen=True, window_size=self.pixels)
+        p.set_background("white")
+        # unlit, so that a block's colour is the colour bar's at its value (lit, the blocks
+        # came out about 20% darker than the bar said)
+        p.add_mesh(mesh, scalars="shown", clim=self.clim, cmap=self.cmap, show_scalar_bar=False,
+                   lighting=False)
+        # the polygons' own edges (show_edges would draw the triangles they render as)
+        p.add_mesh(mesh.extract_all_edges(), color="black", line_width=1, lighting=False)
+        p.camera_position = [(0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)]
         p.enable_parallel_projection()
         p.camera.parallel_scale = 0.5 * (y1 - y0)
         img = p.screenshot(return_img=True)
@@ -417,7 +431,7 @@ class _Frames:
         ax.set_ylabel("y (m)")
         ax.tick_params(labelsize=9)
         cax = fig.add_axes(((left + pw + 16) / w, bottom / h, 16 / w, ph / h))
-        bar = fig.colorbar(ScalarMappable(colors.Normalize(*self.clim), "viridis"), cax=cax)
+        bar = fig.colorbar(ScalarMappable(colors.Normalize(*self.clim), self.cmap), cax=cax)
         bar.set_label(self.title, fontsize=10)
         bar.ax.tick_params(labelsize=9)
         x0, x1, y0, y1 = self.extent
