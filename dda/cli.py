@@ -2,12 +2,18 @@
 scene.
 
     dda run SCENE.toml|SCRIPT.py|RUN.ckpt [--out DIR] [--duration S] [--no-progress]
-    dda demo [--out DIR]
+                                          [--allow-outside-output]
+    dda demo [--out DIR] [--duration S] [--no-progress]
     dda render OUT/case.pvd [--png FILE] [--gif FILE] [--mp4 FILE] [--field NAME] [--frame N]
-                            [--relative-to BLOCK|auto|none]
+                            [--relative-to BLOCK|auto|none] [--fps F] [--max-frames N]
     dda info SCENE.toml|SCRIPT.py
-    dda fos SCENE.toml [--tolerance T] [--analysis auto|static|dynamic] [--workers N]
-                       [--picture FILE] [--csv FILE]
+    dda fos SCENE.toml [--tolerance T] [--analysis auto|static|dynamic] [--resolution G]
+                       [--displacement-ratio R] [--workers N] [--picture FILE] [--csv FILE]
+                       [--no-progress]
+
+Exit codes: 0 done; 1 a run that stopped (SimulationError: its files so far are written);
+2 a mistake in the input (a scene file's error, a path that cannot be written, a bad
+option); 130 interrupted (Ctrl-C, SIGTERM).
 """
 
 from __future__ import annotations
@@ -116,10 +122,11 @@ def cmd_render(args):
         png = plot.render_frame(args.pvd, args.png, frame=args.frame, field=args.field,
                                 relative_to=args.relative_to)
         print(f"wrote {png}")
-    for movie in (args.gif, args.mp4):
-        if movie:
-            made = plot.animate(args.pvd, movie, field=args.field, fps=args.fps,
-                                relative_to=args.relative_to)
+    movies = [m for m in (args.gif, args.mp4) if m]
+    if movies:  # each frame drawn once for both
+        for made in plot.animate_to(movies, args.pvd, field=args.field, fps=args.fps,
+                                    max_frames=args.max_frames,
+                                    relative_to=args.relative_to):
             print(f"wrote {made}")
     return 0
 
@@ -358,6 +365,9 @@ def main(argv=None) -> int:
     p.add_argument("--frame", type=int, default=-1, help="frame of the PNG (default last)")
     p.add_argument("--fps", type=float, default=10.0,
                    help="frames per second of the GIF and MP4 (default 10)")
+    p.add_argument("--max-frames", type=int, default=None, metavar="N",
+                   help="the GIF and MP4 take N frames evenly spread over the series "
+                   "(default: every frame; each takes about 0.2 s to draw)")
     p.set_defaults(func=cmd_render)
     p = sub.add_parser("fos", help="the factor of safety of a scene by strength reduction "
                        "of its joints (dda.studies.strength_reduction)")
@@ -385,12 +395,20 @@ def main(argv=None) -> int:
     p.set_defaults(func=cmd_info)
     args = ap.parse_args(argv)
     from dda.io.scene_file import SceneFileError
+    from dda.simulation import SimulationError
 
     try:
         return args.func(args)
     except (SceneFileError, ValueError, ImportError) as exc:
         print(f"dda {args.command}: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # an output folder that is a file, a path not writable, ...
+        print(f"dda {args.command}: {exc.strerror or exc}"
+              + (f": {exc.filename}" if exc.filename else ""), file=sys.stderr)
+        return 2
+    except SimulationError as exc:  # the steps done are written; the message says why
+        print(f"dda {args.command}: the run stopped: {exc}", file=sys.stderr)
+        return 1
     except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the run said where it stopped
         return 130
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["history", "read_pvd", "render_frame", "animate"]
+__all__ = ["history", "read_pvd", "render_frame", "animate", "animate_to"]
 
 
 def _reference_block(result, relative_to):
@@ -123,7 +123,13 @@ def read_pvd(path) -> list[tuple[float, Path]]:
     entries = [(float(d.get("timestep", "0")), path.parent / d.get("file"))
                for d in root.iter("DataSet") if d.get("file")]
     if not entries:
-        raise ValueError(f"{path} lists no data sets")
+        what = " (a .vtu is one frame: give the series' .pvd)" if path.suffix == ".vtu" else ""
+        raise ValueError(f"{path} lists no data sets{what}")
+    missing = [f for _, f in entries if not f.is_file()]
+    if missing:
+        raise ValueError(f"{path} lists {len(missing)} of its {len(entries)} files that are "
+                         f"not there, the first {missing[0]} (a series moved without its "
+                         "files, or deleted)")
     return sorted(entries, key=lambda e: e[0])
 
 
@@ -491,13 +497,15 @@ def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
     """
     from PIL import Image
 
+    png = Path(png)
+    if png.suffix.lower() not in Image.registered_extensions():
+        raise ValueError(f"render_frame: {png} needs a picture's extension (.png, .jpg, ...)")
     entries = read_pvd(pvd)
     if not -len(entries) <= frame < len(entries):
         raise ValueError(f"frame {frame} is not in {pvd}: it has {len(entries)} frames "
                          f"(0 to {len(entries) - 1}, or -1 for the last)")
     time, file = entries[frame]
     frames = _Frames([file, file], field, size, relative_to)
-    png = Path(png)
     png.parent.mkdir(parents=True, exist_ok=True)
     Image.fromarray(frames.image(file, time)).save(png)
     return png
@@ -507,18 +515,36 @@ def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800,
             max_frames: int | None = None, relative_to="auto") -> Path:
     """Animate a PVD series to a GIF (Pillow) or an MP4 (H.264 through imageio-ffmpeg).
 
-    ``max_frames`` keeps that many frames evenly spread over the series. An MP4's frame
-    size is rounded up to whole 16-pixel blocks, as the codec needs. ``field`` and
-    ``relative_to`` as in :func:`render_frame`; each frame is drawn as it draws one, on one
-    camera and colour range that cover all the frames drawn.
+    ``max_frames`` keeps that many frames evenly spread over the series (the first and the
+    last among them). An MP4's frame size is rounded up to whole 16-pixel blocks, as the
+    codec needs. ``field`` and ``relative_to`` as in :func:`render_frame`; each frame is drawn
+    as it draws one, on one camera and colour range that cover all the frames drawn. The
+    frames go to the file as they are drawn (an MP4), or as 8-bit palette pictures (a GIF,
+    a third of a full-colour frame's memory).
     """
-    out = Path(out)
-    kind = out.suffix.lower()
-    if kind not in (".gif", ".mp4"):
-        raise ValueError(f"animate: write a .gif or an .mp4, not {out.suffix or out.name!r}")
-    if kind == ".mp4":
+    return animate_to([out], pvd, field=field, fps=fps, size=size, max_frames=max_frames,
+                      relative_to=relative_to)[0]
+
+
+def animate_to(outs, pvd, field: str = "displacement", fps: float = 10.0, size=(800, 600),
+               max_frames: int | None = None, relative_to="auto") -> list[Path]:
+    """:func:`animate` to several files (a GIF and an MP4) from one drawing of each frame."""
+    outs = [Path(o) for o in outs]
+    for out in outs:
+        if out.suffix.lower() not in (".gif", ".mp4"):
+            raise ValueError(f"animate: write a .gif or an .mp4, not "
+                             f"{out.suffix or out.name!r}")
+    if isinstance(fps, bool) or not (isinstance(fps, (int, float)) and 0.0 < fps <= 1000.0):
+        raise ValueError(f"animate: fps must be a number of frames per second in (0, 1000], "
+                         f"got {fps!r}")
+    if max_frames is not None and (isinstance(max_frames, bool) or not isinstance(
+            max_frames, (int, np.integer)) or max_frames < 1):
+        raise ValueError(f"animate: max_frames must be a whole number >= 1, got "
+                         f"{max_frames!r}")
+    mp4 = any(o.suffix.lower() == ".mp4" for o in outs)
+    if mp4:
         try:
-            import imageio.v3 as iio
+            import imageio.v2 as iio
             import imageio_ffmpeg  # noqa: F401  (the ffmpeg binary the writer runs)
         except ImportError:
             raise ImportError("MP4 needs imageio and imageio-ffmpeg: pip install 'dda[vis]' "
@@ -529,14 +555,25 @@ def animate(pvd, out, field: str = "displacement", fps: float = 10.0, size=(800,
         pick = np.unique(np.linspace(0, len(entries) - 1, max_frames).round().astype(int))
         entries = [entries[i] for i in pick]
     frames = _Frames([f for _, f in entries], field, size, relative_to)
-    images = [frames.image(f, t) for t, f in entries]
-    out.parent.mkdir(parents=True, exist_ok=True)
-    if kind == ".gif":
-        from PIL import Image
+    for out in outs:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    movies = [iio.get_writer(out, format="FFMPEG", fps=fps, macro_block_size=16)
+              for out in outs if out.suffix.lower() == ".mp4"]
+    gif_frames = []
+    try:
+        for t, f in entries:
+            image = frames.image(f, t)
+            for movie in movies:
+                movie.append_data(image)
+            if len(movies) < len(outs):
+                from PIL import Image
 
-        pics = [Image.fromarray(i).convert("P", palette=Image.ADAPTIVE) for i in images]
-        pics[0].save(out, save_all=True, append_images=pics[1:], loop=0,
-                     duration=int(round(1000.0 / fps)))
-    else:
-        iio.imwrite(out, np.stack(images), plugin="FFMPEG", fps=fps)
-    return out
+                gif_frames.append(Image.fromarray(image).convert("P", palette=Image.ADAPTIVE))
+    finally:
+        for movie in movies:
+            movie.close()
+    for out in outs:
+        if out.suffix.lower() == ".gif":
+            gif_frames[0].save(out, save_all=True, append_images=gif_frames[1:], loop=0,
+                               duration=int(round(1000.0 / fps)))
+    return outs

@@ -493,3 +493,70 @@ def test_a_scene_at_site_coordinates_draws_as_at_the_origin(series, tmp_path):
     there = _Frames([far, far], "displacement", (640, 480)).scene(far).astype(float)
     differ = np.abs(here - there).max(axis=2) > 30
     assert differ.mean() < 1e-4, differ.mean()  # 0 now; 2.8e-3 before
+
+
+def test_a_run_that_cannot_go_on_is_one_line_with_exit_code_1(tmp_path, capsys):
+    """A run stopped by SimulationError: one line naming the time and the reason, exit code
+    1, the frames so far written (a 29-line traceback before)."""
+    scene = tmp_path / "stuck.toml"
+    scene.write_text(SCENE.replace('solver = "legacy"', 'solver = "newton"\nmax_iter = 1\n'
+                                   'tol = 1e-15').replace("normal_penalty = 1e9",
+                                                          "normal_penalty = 2e12"))
+    with pytest.warns(dda.PenaltyWarning):
+        code = main(["run", str(scene), "--out", str(tmp_path / "out"), "--no-progress"])
+    assert code == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith("dda run: the run stopped: the run cannot go on at t = ")
+    assert plot.read_pvd(tmp_path / "out" / "slide.pvd")
+
+
+def test_output_path_errors_are_one_line(series, tmp_path, capsys):
+    scene, pvd = series
+    (tmp_path / "afile").write_text("")
+    assert main(["run", str(scene), "--out", str(tmp_path / "afile"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("dda run: ") and "afile" in err and "Traceback" not in err
+    assert main(["render", str(pvd), "--png", str(tmp_path / "noext")]) == 2
+    assert "needs a picture's extension" in capsys.readouterr().err
+
+
+def test_render_refuses_bad_animation_settings_before_drawing(series, tmp_path, capsys):
+    _, pvd = series
+    for option in (["--fps", "0"], ["--fps", "-1"], ["--max-frames", "0"]):
+        assert main(["render", str(pvd), "--gif", str(tmp_path / "a.gif"), *option]) == 2
+        assert "animate: " in capsys.readouterr().err
+    assert not (tmp_path / "a.gif").exists()
+
+
+def test_render_draws_a_gif_and_an_mp4_of_the_frames_asked_for(series, tmp_path, monkeypatch):
+    """--max-frames N takes N frames evenly spread, first and last among them; a GIF and an
+    MP4 asked for together are drawn from one drawing of each frame."""
+    import imageio.v3 as iio
+    from PIL import Image
+
+    from dda.plot import _Frames
+
+    drawn = []
+    image = _Frames.image
+    monkeypatch.setattr(_Frames, "image", lambda self, f, t: drawn.append(t) or image(self, f, t))
+    _, pvd = series
+    gif, mp4 = tmp_path / "a.gif", tmp_path / "a.mp4"
+    assert main(["render", str(pvd), "--gif", str(gif), "--mp4", str(mp4),
+                 "--max-frames", "4"]) == 0
+    times = [t for t, _ in plot.read_pvd(pvd)]
+    assert drawn == [times[0], times[3], times[7], times[10]]
+    with Image.open(gif) as im:
+        assert im.n_frames == 4
+    assert len(list(iio.imiter(mp4, plugin="FFMPEG"))) == 4
+
+
+def test_a_series_whose_files_are_missing_is_named(series, tmp_path):
+    import shutil
+
+    _, pvd = series
+    copy = tmp_path / "moved.pvd"
+    shutil.copy(pvd, copy)  # the index without its files
+    with pytest.raises(ValueError, match=r"moved.pvd lists 11 of its 11 files that are not "
+                                         r"there, the first .*slide_00000.vtu"):
+        plot.read_pvd(copy)

@@ -121,6 +121,31 @@ def test_a_full_scene_builds_what_the_api_would(tmp_path):
                                    rtol=1e-12, atol=1e-15)
 
 
+def test_the_output_table_sets_the_writers_interval_and_names(tmp_path):
+    """``[output] interval`` (evenly spaced frames in simulated time) and ``plain_names``
+    reach the writer (they were unknown keys); a plausibility warning of the file is given
+    once, with its line (``loaded.simulation()`` repeated it without)."""
+    import warnings
+
+    text = (FULL.replace("every = 5", "interval = 0.004\nplain_names = false")
+            .replace("dt = 1e-3", "dt = 1e-3\nrecord_every = 1"))
+    loaded = load_scene(write(tmp_path, text))
+    writer = loaded.writer(tmp_path / "out")
+    assert (writer.interval, writer.every, writer.plain_names) == (0.004, 1, False)
+    loaded.run(out=tmp_path / "out")
+    from dda.plot import read_pvd
+
+    times = [t for t, _ in read_pvd(tmp_path / "out" / "full.pvd")]
+    np.testing.assert_allclose(times, [0.0, 0.004, 0.008, 0.012, 0.016, 0.02], atol=1e-12)
+    long = write(tmp_path, FULL.replace("dt = 1e-3", "dt = 0.5"), "long.toml")
+    with pytest.warns(dda.PlausibilityWarning, match=r"long.toml, line \d+, simulation: "
+                                                     r"Simulation: dt = 0.5 s is"):
+        again = load_scene(long)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", dda.PlausibilityWarning)
+        again.simulation()
+
+
 def test_barton_and_newton_settings(tmp_path):
     text = FULL.replace('friction = { law = "coulomb", phi = 30.0 }',
                         'friction = { law = "barton", jrc = 10.0, jcs = 50e6, phi_r = 28.0 }')
@@ -162,6 +187,9 @@ def test_prescribed_velocity_frees_the_missing_direction(tmp_path):
      "unknown key 'mu'"),
     ("dt = 1e-3", "dt = -1e-3", "simulation.dt", "positive"),
     ("every = 5", "evry = 5", "output.evry", "unknown key"),
+    ("every = 5", "every = 5\ninterval = 0.01", "output.interval", "not both"),
+    ("every = 5", "interval = -0.01", "output.interval", "positive"),
+    ("every = 5", "plain_names = 0", "output.plain_names", "true or false"),
     ("spacing = 0.5", "spacing = -0.5", "cut[0].joint_sets[0]", "spacing"),
     ("vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]", "vertices = [[1, 1], [1, 2], [2, 2], [2, 1]]",
      "blocks[1]", "clockwise"),
@@ -325,6 +353,9 @@ def test_the_file_format_covers_every_api_setting():
             assert f'"{name}"' in source, f"[simulation] has no key {name!r}"
     for name in ("checkpoint", "checkpoint_every"):
         assert f'"{name}"' in source, f"[output] has no key {name!r}"
+    for name in inspect.signature(dda.io.VTUWriter.__init__).parameters:
+        if name not in ("self", "prefix"):
+            assert f'"{name}"' in source, f"[output] has no key {name!r} (VTUWriter's)"
     for name in inspect.signature(dda.Scene.add_block).parameters:
         if name not in ("self", "vertices"):
             assert f'"{name}"' in source, f"[[blocks]] has no key {name!r}"

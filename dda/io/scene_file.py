@@ -112,7 +112,9 @@ The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
 
     [output]
     prefix = "case"                       # files OUT/case_00000.vtu ... and OUT/case.pvd
-    every = 10                            # write every 10th recorded step
+    every = 10                            # write every 10th recorded step, or instead
+                                          # interval = 0.01: a frame each 0.01 s simulated
+                                          # (plain_names = false: units-only field names)
     dir = "out"                           # inside the scene file's folder; --out overrides
     checkpoint = "case.ckpt"              # optional, in the output folder; resume with
     checkpoint_every = 100                # dda.Simulation.resume (see Simulation.run)
@@ -434,7 +436,8 @@ class LoadedScene:
     solver : the solver named by ``[simulation] solver``
     settings : keyword arguments of :class:`dda.Simulation` (dt, analysis, ...)
     duration : simulated time of ``[simulation] duration`` (None when left out)
-    output_dir, prefix, every : the ``[output]`` table (output_dir None: no files)
+    output_dir, prefix, every, interval, plain_names : the ``[output]`` table (output_dir
+        None: no files; the last three as :class:`dda.io.VTUWriter` takes them)
     path : the file read
     effects : what the scene holds, in words (gravity, shaking of ..., damping, ...)
     checkpoint, checkpoint_every : the ``[output]`` checkpoint file name (None: none)
@@ -452,9 +455,19 @@ class LoadedScene:
     effects: list = field(default_factory=list)
     checkpoint: str | None = None
     checkpoint_every: int = 100
+    interval: float | None = None
+    plain_names: bool = True
 
     def simulation(self):
-        """The :class:`dda.Simulation` of this scene with the file's settings."""
+        """The :class:`dda.Simulation` of this scene with the file's settings.
+
+        Its plausibility warnings were given when the file was read, with the file's line:
+        they are not repeated here."""
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", PlausibilityWarning)
+            return self._new_simulation()
+
+    def _new_simulation(self):
         from dda.simulation import Simulation
 
         return Simulation(self.scene, solver=self.solver, **self.settings)
@@ -489,7 +502,8 @@ class LoadedScene:
         folder = self.output_folder(out)
         if folder is None:
             return None
-        return VTUWriter(folder / self.prefix, every=self.every)
+        return VTUWriter(folder / self.prefix, every=self.every, interval=self.interval,
+                         plain_names=self.plain_names)
 
 
 #: the tables of a scene file, in the order they are read
@@ -558,13 +572,14 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     solver, settings, duration = _read_simulation(r, data, settings=(
         "dt", "analysis", "velocity_carry", "max_open_close", "record_every",
         "max_displacement_ratio", "penetration_tolerance", "locate_reversals"))
-    output = _read_output(r, data, path, keys={"dir", "prefix", "every", "checkpoint",
+    output = _read_output(r, data, path, keys={"dir", "prefix", "every", "interval",
+                                               "plain_names", "checkpoint",
                                                "checkpoint_every"},
                           outside=allow_outside_output)
     loaded = LoadedScene(scene, blocks, solver, settings, duration, path=path, effects=effects,
                          **output)
     # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
-    r.call(("simulation",), _at_block_lines, r, loaded.simulation)
+    r.call(("simulation",), _at_block_lines, r, loaded._new_simulation)
     return loaded
 
 
@@ -1049,6 +1064,11 @@ def _read_output(r, data, path, keys, outside=False) -> dict:
         checkpoint = _file_name(r, checkpoint, "checkpoint")
     fields["checkpoint"] = checkpoint
     fields["checkpoint_every"] = _count(r, out, ("output",), "checkpoint_every", 100)
+    if "interval" in out:
+        if "every" in out:
+            raise r.error(("output", "interval"), "give every or interval, not both")
+        fields["interval"] = r.number(out, ("output",), "interval", positive=True)
+    fields["plain_names"] = _bool(r, {"plain_names": True, **out}, ("output",), "plain_names")
     return fields
 
 
