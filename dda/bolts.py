@@ -88,7 +88,7 @@ class BoltTable:
     labels: tuple
 
     @classmethod
-    def from_scene(cls, scene, free) -> BoltTable | None:
+    def from_scene(cls, scene, free, origin=(0.0, 0.0)) -> BoltTable | None:
         """The scene's bolts, or None without any; ``free`` (n_blocks,) are the blocks with
         unknowns. ValueError for a bolt between two blocks whose motion is known."""
         bolts = scene.bolts
@@ -104,6 +104,7 @@ class BoltTable:
             raise ValueError(f"{labels[i]}: both its blocks have a known motion (fixed, shaken "
                              "or moved); a bolt needs a block that can move")
         points = np.array([(b.point_a, b.point_b) for b in bolts], dtype=float)
+        points = points - np.asarray(origin, dtype=float)  # the model's frame
         delta = points[:, 1] - points[:, 0]
         return cls(blocks, points, np.array([b.stiffness for b in bolts], dtype=float),
                    np.array([b.pretension for b in bolts], dtype=float),

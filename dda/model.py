@@ -157,6 +157,12 @@ class Model:
         nb = len(blocks)
         self.n_blocks = nb
         x0, offsets = scene.vertex_arrays()
+        #: where the model's coordinates start, in the scene's: a scene at a site's
+        #: coordinates (y = 4e6 m) is computed about its own centre
+        #: (:func:`dda.geometry.site_origin`; the frames and results are in the scene's)
+        self.origin = geometry.site_origin(x0)
+        if self.origin.any():
+            x0 = x0 - self.origin
         self.offsets = offsets
         self.topo = VertexTopology.from_offsets(offsets)
         self.x_initial = x0.copy()
@@ -188,18 +194,22 @@ class Model:
         self.constraint_penalty = 100.0 * young.max()
         self.damping = scene.damping_coefficients()
         self.water = scene.water
+        if self.water is not None and self.origin.any():
+            self.water = replace(self.water, x=self.water.x - self.origin[0],
+                                 y=self.water.y - self.origin[1])
         # the edges (by first vertex) the water can load: the free blocks'
         self.water_edges = np.flatnonzero(self.free[self.topo.block])
         self.joints = JointTable.from_scene(scene, nb)
         self._compile_loads(scene.point_loads)
         self._compile_springs(x0)
         # the bolts (dda.bolts), None in a scene without any
-        self.bolts = BoltTable.from_scene(scene, self.free)
+        self.bolts = BoltTable.from_scene(scene, self.free, self.origin)
         # what a step derives from the contacts' block pairs alone, kept while they stay
         self.memo = Memo(size=2)
 
     def __setstate__(self, state):
         self.__dict__.update(state)
+        self.__dict__.setdefault("origin", np.zeros(2))  # a model pickled before it was
         self.__dict__.setdefault("bolts", None)  # a model pickled before bolts were
         # a model pickled before these were kept (a checkpoint of an earlier version)
         if "memo" not in state:
@@ -208,7 +218,7 @@ class Model:
             self.memo = Memo(size=2)
 
     def _compile_loads(self, loads):
-        self.load_initial = np.array([ld.point for ld in loads]).reshape(-1, 2)
+        self.load_initial = np.array([ld.point for ld in loads]).reshape(-1, 2) - self.origin
         self.load_block = np.array([ld.block for ld in loads], dtype=np.int64)
         self.load_constant = np.array([ld.force(0.0) if ld.force.constant else (0.0, 0.0)
                                        for ld in loads]).reshape(-1, 2)
@@ -219,7 +229,7 @@ class Model:
         # one penalty spring per point (default: every vertex) of each partially constrained
         # block; the points are material points that move with the block
         partial = self.partial_motions
-        points = [m.points if m.points is not None
+        points = [m.points - self.origin if m.points is not None
                   else x0[self.offsets[m.block]:self.offsets[m.block + 1]] for m in partial]
         counts = np.array([len(p) for p in points], dtype=np.int64)
         self.spring_initial = np.concatenate(points) if points else np.zeros((0, 2))

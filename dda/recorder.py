@@ -33,8 +33,13 @@ def frame(model, state) -> Frame:
         point, normal = g.p1, g.normal
     else:
         point = normal = np.zeros((0, 2))
+    origin = model.__dict__.get("origin")
+    shift = origin is not None and origin.any()  # back to the scene's coordinates
+    if shift:
+        point = point + origin
     return Frame(
-        time=state.time, vertices=state.x.copy(), offsets=model.offsets,
+        time=state.time, vertices=state.x + origin if shift else state.x.copy(),
+        offsets=model.offsets,
         vertex_displacement=state.x - model.x_initial, vertex_velocity=vv,
         displacement=ints.centroid - model.centroid_initial, velocity=state.velocity.copy(),
         rotation=state.rotation.copy(), stress=state.stress.copy(),
@@ -44,15 +49,16 @@ def frame(model, state) -> Frame:
         contact_state=c.state[closed].astype(np.int64),
         block_names=tuple(b.name for b in model.scene.blocks),
         shaken=np.array([s.block for s in model.shakes], dtype=np.int64),
-        **_bolt_fields(model, state),
+        **_bolt_fields(model, state, origin if shift else None),
     )
 
 
-def _bolt_fields(model, state) -> dict:
+def _bolt_fields(model, state, origin=None) -> dict:
     """The bolts' fields of a :class:`dda.result.Frame` (none in a scene without bolts)."""
     if model.bolts is None:
         return {}
-    return {"bolt_points": state.bolt_points.copy(), "bolt_force": state.bolt_forces(model),
+    points = state.bolt_points + origin if origin is not None else state.bolt_points.copy()
+    return {"bolt_points": points, "bolt_force": state.bolt_forces(model),
             "bolt_broken": state.bolt_broken.copy()}
 
 
