@@ -194,6 +194,9 @@ def test_prescribed_velocity_frees_the_missing_direction(tmp_path):
     ("vertices = [[1, 1], [2, 1], [2, 2], [1, 2]]", "vertices = [[1, 1], [1, 2], [2, 2], [2, 1]]",
      "blocks[1]", "clockwise"),
     ('solver = "legacy"', 'solver = "implicit"', "simulation.solver", "'newton' or 'legacy'"),
+    ("[joints.default]", "[joint.default]", "joint", "did you mean 'joints'?"),
+    ("[[blocks]]", "[[block]]", "block", "did you mean 'blocks'?"),
+    ("every = 5", "evry = 5", "output.evry", "did you mean 'every'?"),
 ])
 def test_errors_name_the_line_and_the_key(tmp_path, change, line, key, words):
     text = FULL.replace(change, line, 1)
@@ -208,6 +211,27 @@ def test_errors_name_the_line_and_the_key(tmp_path, change, line, key, words):
     last = key.split(".")[-1].split("[")[0]
     assert last in shown or f"[{last}" in shown or f"[[{last}" in shown, (msg, shown)
     assert f", {key}:" in msg and words in msg, msg
+
+
+def test_a_bracket_in_a_comment_keeps_the_lines_of_the_keys_after_it(tmp_path):
+    text = FULL.replace('name = "base"', 'name = "base"  # see "Adachi" [2017, and {', 1)
+    text = text.replace("every = 5", "evry = 5")
+    with pytest.raises(SceneFileError) as info:
+        load_scene(write(tmp_path, text))
+    number = text.splitlines().index("evry = 5") + 1
+    assert str(info.value).startswith(f"scene.toml, line {number}, output.evry: ")
+
+
+def test_a_scene_file_without_joints_says_which_table_to_add(tmp_path):
+    import re
+
+    text = re.sub(r"\[joints.default\].*?\n\n\[\[joints.pair\]\].*?\n\n", "", FULL,
+                  flags=re.S)
+    assert "joints" not in text
+    with pytest.raises(SceneFileError, match=r"joints: no \[joints.default\], and "
+                                             r"\[\[joints.pair\]\] for 0 of the 10 block "
+                                             r"pairs.*add \[joints.default\]"):
+        load_scene(write(tmp_path, text))
 
 
 def test_syntax_errors_and_missing_files(tmp_path):

@@ -6,7 +6,9 @@ blocks by name, the solver and run settings); ``loaded.simulation()`` builds the
 error names the file, the line and the key, for example
 ``slope.toml, line 14, blocks[2].material: no material 'rok' (there are: rock)``.
 
-The format (every table but ``[[blocks]]`` or ``[[cut]]`` may be left out)::
+The format (every table may be left out but ``[simulation]`` with its ``dt``, some
+``[[blocks]]`` or ``[[cut]]``, and, with two blocks or more, ``[joints.default]`` or a
+``[[joints.pair]]`` for every two blocks)::
 
     [scene]
     gravity = 9.81                        # 0 or absent: no gravity
@@ -307,7 +309,7 @@ def key_lines(text: str) -> dict[tuple, int]:
     table: tuple = ()
     depth = 0  # open brackets of a multi-line value
     for number, raw in enumerate(text.splitlines(), start=1):
-        line = raw.split("#", 1)[0] if '"' not in raw and "'" not in raw else raw
+        line = _code_of(raw)
         if depth == 0:
             m = _HEADER.match(raw)
             if m and not _KEY.match(raw):
@@ -328,6 +330,28 @@ def key_lines(text: str) -> dict[tuple, int]:
     return lines
 
 
+def _code_of(raw: str) -> str:
+    """A TOML line's code: its strings emptied and its comment cut off, so that a bracket in
+    either (``name = "base"  # see [Adachi 2017``) is not counted as one that opens a
+    value (every later line lost its number)."""
+    out, quote, i = [], None, 0
+    while i < len(raw):
+        ch = raw[i]
+        if quote is None:
+            if ch == "#":
+                break
+            if ch in "\"'":
+                quote = ch
+            out.append(ch)
+        elif ch == "\\" and quote == '"':
+            i += 1  # an escaped character of a basic string
+        elif ch == quote:
+            quote = None
+            out.append(ch)
+        i += 1
+    return "".join(out)
+
+
 # ---------------------------------------------------------------------- reading
 @dataclass
 class _Reader:
@@ -344,6 +368,11 @@ class _Reader:
             if path[:n] in self.lines:
                 line = self.lines[path[:n]]
                 break
+            # a table written only through its subtables ([joint.default]): their first line
+            below = [v for k, v in self.lines.items() if n and k[:n] == path[:n]]
+            if below:
+                line = min(below)
+                break
         key = _format_path(path)
         where = f"{self.name}, line {line}" if line else self.name
         return SceneFileError(f"{where}, {key}: {message}" if key else f"{where}: {message}")
@@ -353,7 +382,9 @@ class _Reader:
             raise self.error(path, f"must be a table, got {type(data).__name__}")
         for key in data:
             if key not in known:
-                raise self.error((*path, key), "unknown key (known here: "
+                near = difflib.get_close_matches(str(key), list(known), n=1)
+                hint = f"did you mean {near[0]!r}? " if near else ""
+                raise self.error((*path, key), f"unknown key ({hint}known here: "
                                  f"{', '.join(sorted(known))})")
         return data
 
@@ -578,6 +609,13 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
                           outside=allow_outside_output)
     loaded = LoadedScene(scene, blocks, solver, settings, duration, path=path, effects=effects,
                          **output)
+    n = len(scene.block_inputs)
+    if n > 1 and scene.default_joint is None and len(scene.pair_joints) < n * (n - 1) // 2:
+        raise r.error(("joints",), f"no [joints.default], and [[joints.pair]] for "
+                      f"{len(scene.pair_joints)} of the {n * (n - 1) // 2} block pairs: any "
+                      "two blocks may touch during a run; add [joints.default] with "
+                      "normal_penalty, shear_penalty and friction (or a pair for every two "
+                      "blocks)")
     # the Simulation checks the rest (dt, analysis, ...): its messages get the file's line
     r.call(("simulation",), _at_block_lines, r, loaded._new_simulation)
     return loaded
