@@ -18,11 +18,15 @@ Examples
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from dda._checks import finite_number
+
+#: dropped slivers over this share of the domain's area are reported (a PlausibilityWarning)
+SLIVER_AREA_WARNING = 0.01
 
 __all__ = ["JointSet", "cut_blocks"]
 
@@ -127,10 +131,12 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
     ----------
     domain : (n, 2) array-like
         A simple polygon (any orientation), in metres.
-    joint_sets : list of JointSet
+    joint_sets : list of JointSet (or one)
     min_size : float, optional
         Blocks thinner than this (2 area / perimeter, half the side of a square) are dropped
-        as slivers; by default a tenth of the smallest spacing.
+        as slivers; by default a tenth of the smallest spacing. Slivers over 1% of the
+        domain's area in all (:data:`SLIVER_AREA_WARNING`) are reported by a
+        :class:`~dda.PlausibilityWarning`.
     seed : int
         Seed of the random phases of non-persistent traces.
     max_blocks : int, optional
@@ -161,7 +167,7 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
         raise ValueError("cut_blocks: the domain's corners must be finite")
     if not dom.is_valid or dom.area <= 0.0:
         raise ValueError("cut_blocks: the domain must be a simple polygon with an area")
-    sets = list(joint_sets)
+    sets = [joint_sets] if isinstance(joint_sets, JointSet) else list(joint_sets)
     for i, js in enumerate(sets):
         if not isinstance(js, JointSet):
             raise TypeError(f"cut_blocks: joint_sets[{i}] must be a JointSet, got {js!r}")
@@ -195,6 +201,7 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
     grid = 10.0 ** (math.floor(math.log10(extent)) - 9)
     faces = polygonize(shapely.union_all(lines, grid_size=grid))
     blocks = []
+    dropped, dropped_area = 0, 0.0
     for face in shapely.get_parts(faces) if hasattr(faces, "geoms") else faces:
         if face.area <= 0.0 or not dom.contains(face.representative_point()):
             continue
@@ -204,7 +211,15 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
                 "meets no other joint); change the trace length or the seed")
         face = orient(face.simplify(0.0), sign=1.0)
         if 2.0 * face.area / face.length < min_size:
+            dropped, dropped_area = dropped + 1, dropped_area + face.area
             continue
         blocks.append([(float(x), float(y)) for x, y in face.exterior.coords[:-1]])
     blocks.sort(key=lambda b: (round(min(p[1] for p in b), 9), round(min(p[0] for p in b), 9)))
+    if dropped_area > SLIVER_AREA_WARNING * dom.area:
+        from dda.plausibility import PlausibilityWarning
+
+        warnings.warn(f"cut_blocks: {dropped} slivers thinner than min_size = {min_size:g} m "
+                      f"were dropped, {100 * dropped_area / dom.area:.2g}% of the domain's "
+                      f"area ({len(blocks)} blocks kept): a smaller min_size keeps them",
+                      PlausibilityWarning, stacklevel=2)
     return blocks

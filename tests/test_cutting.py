@@ -141,6 +141,23 @@ def test_slivers_are_dropped():
     assert len(cut_blocks([(0, 0), (3, 0), (3, 1), (0, 1)], sets, min_size=0.0)) == 4
 
 
+def test_slivers_over_a_percent_of_the_area_are_reported():
+    """A 5 cm strip of a 1 m square, 5% of its area, went with no word (a review's two sets
+    1 degree apart lost 18 of 27 pieces, 3.5% of the area); now a warning says how many and
+    how much; a 0.7% strip is not worth one. One JointSet is taken as a list of one."""
+    square = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    with pytest.warns(dda.PlausibilityWarning, match=r"cut_blocks: 1 slivers thinner than "
+                                                     r"min_size = 0.1 m were dropped, 5% of"):
+        blocks = cut_blocks(square, JointSet(dip=90, spacing=1.0, offset=0.05), min_size=0.1)
+    assert len(blocks) == 1 and areas(blocks)[0][0] == pytest.approx(0.95, rel=1e-12)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", dda.PlausibilityWarning)
+        cut_blocks([(0, 0), (3, 0), (3, 1), (0, 1)], [JointSet(dip=90, spacing=1.0,
+                                                               offset=0.02)])  # 0.7%
+
+
 @pytest.mark.parametrize("kwargs, match", [
     ({"dip": 0, "spacing": 0}, "spacing must be positive"),
     ({"dip": np.nan, "spacing": 1}, "dip must be finite"),
