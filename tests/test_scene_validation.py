@@ -142,6 +142,29 @@ def test_missing_default_joint():
         dda.Simulation(scene, dt=1e-3)
 
 
+def test_blocks_are_found_by_name_in_a_scene_of_any_age():
+    """Names are kept in an index as blocks are added (a search of the list made adding
+    20,000 blocks take 9.6 s, now 1.6); a scene pickled before the index builds it; a name
+    with a control character is refused (a zero byte ends a name in the VTU files)."""
+    import pickle
+
+    scene = dda.Scene()
+    for i in range(5):
+        scene.add_block(box(2 * i, 0, 1, 1), ROCK, name=f"b{i}")
+    assert scene.block("b3").index == 3 and scene.block(4).name == "b4"
+    old = pickle.loads(pickle.dumps(scene))
+    del old.__dict__["_names"]  # as a checkpoint of before keeps it
+    assert old.block("b2").index == 2
+    with pytest.raises(ValueError, match="unique"):
+        old.add_block(box(20, 0, 1, 1), ROCK, name="b0")
+    assert old.add_block(box(20, 0, 1, 1), ROCK, name="b5").index == 5
+    assert old.block("b5").index == 5
+    with pytest.raises(ValueError, match="no block named"):
+        old.block(["b5"])
+    with pytest.raises(ValueError, match="control characters"):
+        scene.add_block(box(30, 0, 1, 1), ROCK, name="a\0b")
+
+
 def test_effect_conflicts_and_unknown_blocks():
     scene = dda.Scene()
     fixed = scene.add_block(box(0, 0, 1, 1), ROCK, fixed=True, name="f")
