@@ -329,6 +329,9 @@ def cmd_fos(args):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(prog="dda", description="2D Discontinuous Deformation "
                                  "Analysis: run scene files, render their output.")
+    from dda import __version__
+
+    ap.add_argument("--version", action="version", version=f"dda {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
     p = sub.add_parser("run", help="run a TOML scene or a Python script, or resume a "
                        "checkpoint")

@@ -399,6 +399,12 @@ class Simulation:
         for s in self.model.shakes:
             s.history.check_covers(t_end)
         writer = output if output is not None else self.output
+        last = getattr(writer, "last_time", None)
+        if last is not None and last > self.committed.time + 1e-9 * max(1.0, abs(last)):
+            raise ValueError(
+                f"Simulation.run: the writer's series already reaches t = {last:g} s and this "
+                f"run starts at t = {self.committed.time:g} s: its frames would go back in "
+                "time in one .pvd; give each simulation its own writer (or prefix)")
         if checkpoint is not None:  # fail now, not at the first checkpoint, if it cannot
             checkpoint_payload(self, writer, t_end, *checkpoint)
         return t_end, writer, checkpoint

@@ -72,6 +72,25 @@ def test_a_run_into_an_earlier_runs_folder_leaves_one_series(tmp_path, rock):
     assert len(writer.files) == 6
 
 
+def test_a_writer_takes_one_series(tmp_path, rock):
+    """One writer handed to a second simulation from t = 0 wrote times going back in one
+    .pvd; it is refused, and a run that goes on from where the writer stands is not; a
+    non-whole every (1.5, taken as 1) is refused."""
+    writer = dda.io.VTUWriter(tmp_path / "case")
+    sim = dda.Simulation(_two_blocks(rock), dt=1e-3)
+    sim.run(0.005, output=writer)
+    sim.run(0.005, output=writer)  # goes on from 0.005 s
+    with pytest.raises(ValueError, match=r"already reaches t = 0.01 s and this run starts at "
+                                         r"t = 0 s"):
+        dda.Simulation(_two_blocks(rock), dt=1e-3).run(0.005, output=writer)
+    times = [float(e.get("timestep")) for e in
+             ET.parse(writer.pvd_path).getroot().findall("./Collection/DataSet")]
+    assert np.all(np.diff(times) > 0) and len(times) == 11
+    for every in (1.5, 0, True):
+        with pytest.raises(ValueError, match="every must be a whole number"):
+            dda.io.VTUWriter(tmp_path / "x", every=every)
+
+
 def _two_blocks(rock):
     scene = dda.Scene(gravity=9.81)
     scene.add_block(box(0, 0, 1, 0.2), rock, fixed=True, name="base")

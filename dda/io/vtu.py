@@ -121,8 +121,10 @@ class VTUWriter:
     def __init__(self, prefix, every: int = 1, plain_names: bool = True,
                  interval: float | None = None):
         self.prefix = Path(prefix)
-        if int(every) < 1:
-            raise ValueError("VTUWriter: every must be at least 1")
+        if (isinstance(every, bool) or not isinstance(every, (int, np.integer))
+                or int(every) < 1):
+            raise ValueError(f"VTUWriter: every must be a whole number of recorded steps, at "
+                             f"least 1, got {every!r}")
         self.every = int(every)
         if interval is not None:
             interval = float(interval)
