@@ -396,8 +396,12 @@ class _Frames:
         # came out about 20% darker than the bar said)
         p.add_mesh(mesh, scalars="shown", clim=self.clim, cmap=self.cmap, show_scalar_bar=False,
                    lighting=False)
-        # the polygons' own edges (show_edges would draw the triangles they render as)
-        p.add_mesh(mesh.extract_all_edges(), color="black", line_width=1, lighting=False)
+        # the polygons' own edges (show_edges would draw the triangles they render as),
+        # lifted towards the camera: in the faces' plane they fought them for the depth test
+        # and parts of outlines came out grey or missing
+        edges = mesh.extract_all_edges()
+        edges.points = edges.points + np.array([0.0, 0.0, 0.01])
+        p.add_mesh(edges, color="black", line_width=1, lighting=False)
         p.camera_position = [(0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0)]
         p.enable_parallel_projection()
         p.camera.parallel_scale = 0.5 * (y1 - y0)

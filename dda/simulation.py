@@ -334,7 +334,8 @@ class Simulation:
         t = self.committed.time
         if checkpoint is None:
             return (f"dda: stopped at t = {t:g} s after {self.control.steps} steps; no "
-                    "checkpoint was set (run(..., checkpoint=PATH) to be able to resume)")
+                    "checkpoint was set (to be able to resume: [output] checkpoint = "
+                    "\"run.ckpt\" in a scene file, run(..., checkpoint=PATH) in Python)")
         return (f"dda: stopped at t = {t:g} s after {self.control.steps} steps; resume with: "
                 f"dda run {checkpoint[0]}")
 

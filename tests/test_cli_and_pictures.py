@@ -560,3 +560,35 @@ def test_a_series_whose_files_are_missing_is_named(series, tmp_path):
     with pytest.raises(ValueError, match=r"moved.pvd lists 11 of its 11 files that are not "
                                          r"there, the first .*slide_00000.vtu"):
         plot.read_pvd(copy)
+
+
+def test_the_blocks_outlines_are_drawn_whole(tmp_path, rock):
+    """Each block's outline is black along its whole side: drawn in the faces' plane, the
+    edges lost the depth test to the faces in patches (two 0.2 x 1.2 m columns lost about
+    half of their sides)."""
+    from dda.contact import CoulombSingle, JointMaterial
+    from dda.plot import _blocks_mesh, _Frames, _pyvista
+
+    scene = dda.Scene(gravity=9.81)
+    scene.add_block([(-2, -0.5), (4, -0.5), (4, 0), (-2, 0)], rock, fixed=True)
+    for x in (0.0, 1.0):
+        scene.add_block([(x, 0), (x + 0.2, 0), (x + 0.2, 1.2), (x, 1.2)], rock)
+    scene.add_block([(2, 0), (3, 0), (3, 0.2), (2.3, 0.2), (2.3, 0.7), (2, 0.7)], rock)
+    scene.set_joint(JointMaterial(5e9, 5e9, CoulombSingle(phi=40.0)))
+    writer = dda.io.VTUWriter(tmp_path / "cols")
+    dda.Simulation(scene, dt=2e-3).run(0.004, output=writer, progress=False)
+    last = writer.files[-1]
+    frames = _Frames([last, last], "displacement", (1024, 768))
+    picture = frames.scene(last).astype(float)
+    x0, x1, _, y1 = frames.extent
+    px = (x1 - x0) / picture.shape[1]
+    mesh = _blocks_mesh(_pyvista(), last, "displacement")
+    for block in (1, 2):
+        (xa, xb, ya, yb, _, _) = mesh.extract_cells([block]).bounds
+        rows = np.arange(int((y1 - yb) / px) + 3, int((y1 - ya) / px) - 2)
+        face = picture[rows[len(rows) // 2], int(((xa + xb) / 2 - x0) / px)].sum()
+        for x in (xa, xb):
+            col = int(round((x - x0) / px))
+            darkest = picture[rows][:, col - 1:col + 2].sum(axis=2).min(axis=1)
+            drawn = np.mean(darkest < face - 50.0)  # darker than the face, and the white
+            assert drawn > 0.95, (block, x, drawn)
