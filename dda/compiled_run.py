@@ -244,6 +244,7 @@ class StepRuns:
                 writer.write(recorder_module.frame(self.sim.model, self.sim.committed))
             else:
                 writer.skip(float(rec_time[r]))
+                self.recorder._skipped = float(rec_time[r])  # (Recorder.stop writes it)
             self.result.frames_written += 1
 
     def _stats(self, stats, norms, n_norms, steps, dt, wall, unknowns, newton):

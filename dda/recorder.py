@@ -103,6 +103,17 @@ class Recorder:
             self._record(state, end=last)
             self.since = 0
 
+    def stop(self, state) -> None:
+        """The run stopped before its end (interrupted, or a step that could not go on): its
+        last committed state is recorded and written, as a run's end is (a thinned series of
+        a stopped run ended up to ``every`` - 1 frames short of where it stopped)."""
+        times = self.result.time
+        if not len(times) or times[-1] != state.time:
+            self._record(state, end=True)
+        elif self.__dict__.get("_skipped") == state.time:  # recorded, but its frame skipped
+            self.writer.write(frame(self.model, state), last=True)
+            self.written = (self.writer, state.time)
+
     def _record(self, state, end=False):
         keys, f, n = pair_forces(self.model, state)
         # the result needs block centroids only; a full Frame is built when a writer asks
@@ -128,5 +139,6 @@ class Recorder:
                 writer.write(frame(self.model, state))
             else:  # (a frame the writer would not write: not built)
                 writer.skip(state.time)
+                self._skipped = state.time
             self.result.frames_written += 1
             self.written = (writer, state.time)

@@ -309,9 +309,11 @@ class Simulation:
                 self._steps(result, t_end, recorder, writer, checkpoint, watchers,
                             interrupts)
             except SimulationError as exc:
+                recorder.stop(self.committed)
                 exc.result = result
                 raise
             except KeyboardInterrupt:
+                recorder.stop(self.committed)
                 if checkpoint is not None:  # the committed state is whole: keep it
                     self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
                 if bar:

@@ -345,3 +345,25 @@ def test_pyvista_draws_the_force_vectors_as_arrows(run_with_output):
     low, high = contacts.bounds[2], arrows.bounds[3]
     assert high == pytest.approx(contacts.bounds[3] + 0.05, rel=1e-3)
     assert arrows.bounds[2] >= low - 1e-3
+
+
+@pytest.mark.parametrize("how", ["interrupt", "cannot go on"])
+def test_a_stopped_thinned_series_ends_where_the_run_stopped(tmp_path, rock, how):
+    """A run with VTUWriter(every=5) stopped after its 13th step (Ctrl-C, or a step that
+    cannot go on) writes its last committed state as the series' last frame; it ended at
+    the 10th before (the reviewer's run: stopped at 8.39632 s, last frame 8.38832 s)."""
+    writer = dda.io.VTUWriter(tmp_path / "case", every=5)
+    sim = dda.Simulation(_two_blocks(rock), dt=1e-3)
+
+    def stop(state, report):
+        if state.time > 0.0125:
+            if how == "interrupt":
+                raise KeyboardInterrupt
+            raise dda.SimulationError("stopped by the test")
+
+    with pytest.raises(KeyboardInterrupt if how == "interrupt" else dda.SimulationError):
+        sim.run(0.05, output=writer, callback=stop)
+    times = [float(e.get("timestep")) for e in
+             ET.parse(writer.pvd_path).getroot().findall("./Collection/DataSet")]
+    assert sim.committed.time == pytest.approx(0.013)
+    np.testing.assert_allclose(times, [0.0, 0.005, 0.010, 0.013], atol=1e-12)
