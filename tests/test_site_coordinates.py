@@ -86,3 +86,35 @@ def test_only_a_scene_far_from_the_origin_moves():
     assert site_origin(square + 1000.3).tolist() == [1001.0, 1001.0]
     assert site_origin(square * 40 + [20.0, 4.1e6]).tolist() == [40.0, 4100020.0]
     assert not site_origin(np.zeros((0, 2))).any()
+
+
+def test_a_checkpoint_of_before_the_origin_resumes_in_place(tmp_path):
+    """A checkpoint written before models had an origin holds the scene's coordinates; it
+    resumes where it stopped (read as the model's, every block sat 4e6 m off: a displacement
+    of (5e5, 4e6) m for a block that had moved 1 mm)."""
+    import json
+
+    path = tmp_path / "run.ckpt"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", dda.PlausibilityWarning)
+        sim = dda.Simulation(three_blocks(SITE), dt=2e-3)
+        sim.run(0.02, progress=False, checkpoint=path)
+        reference = dda.Simulation(three_blocks(SITE), dt=2e-3)
+        reference.run(0.04, progress=False)
+    with np.load(path) as f:  # the layout of before: no origin, positions as the scene's
+        arrays = dict(f)
+    header = json.loads(arrays["header"].tobytes().decode())
+    assert header["state"].pop("origin") == SITE.tolist()
+    for name in ("x", "centroid"):
+        arrays[f"a/state/{name}"] = arrays[f"a/state/{name}"] + SITE
+    arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
+    old = tmp_path / "old.ckpt"
+    with open(old, "wb") as f:
+        np.savez(f, **arrays)
+    resumed = dda.Simulation.resume(old)
+    np.testing.assert_allclose(resumed.frame().vertices, sim.frame().vertices, rtol=0,
+                               atol=1e-9)
+    result = resumed.run(0.02, progress=False)
+    assert np.abs(result.displacement("sq")[-1]).max() < 0.05
+    np.testing.assert_allclose(resumed.frame().vertices, reference.frame().vertices, rtol=0,
+                               atol=1e-9)

@@ -69,7 +69,8 @@ def checkpoint_payload(simulation, writer, end: float, path, every: int) -> byte
             "format": FORMAT, "version": CHECKPOINT_VERSION,
             "scene": scene_to_data(simulation.scene, store),
             "simulation": _simulation_to_data(simulation, store),
-            "state": _state_to_data(simulation.committed, store),
+            "state": _state_to_data(simulation.committed, store,
+                                    simulation.model.__dict__.get("origin")),
             "control": asdict(simulation.control),
             "warned": sorted(simulation.advisor.warned),
             "writer": _writer_to_data(writer, Path(path)),
@@ -129,7 +130,7 @@ def _simulation_to_data(sim, store) -> dict:
     }
 
 
-def _state_to_data(state, store) -> dict:
+def _state_to_data(state, store, origin=None) -> dict:
     c = state.contacts
     for name, value in c.history.items():
         store.put(f"state/history/{name}", value)
@@ -148,9 +149,12 @@ def _state_to_data(state, store) -> dict:
             t, v, u = s
             shaking.append({"t": float(t), "v": [float(x) for x in v],
                             "u": [float(x) for x in u]})
+    # the positions are in the model's coordinates, which start at its origin (a scene far
+    # from (0, 0): dda.geometry.site_origin)
+    origin = [0.0, 0.0] if origin is None else [float(v) for v in origin]
     return {"time": float(state.time), "last_move": float(state.last_move),
             "untracked": float(state.untracked), "penetration": float(state.penetration),
-            "history": sorted(c.history), "shaking": shaking}
+            "history": sorted(c.history), "shaking": shaking, "origin": origin}
 
 
 def _writer_to_data(writer, checkpoint: Path) -> dict | None:
@@ -321,8 +325,17 @@ def _state(data, store, model, initial):
     from dda.contact.contacts import ContactSet
     from dda.step import StepState
 
+    # a checkpoint written before models had an origin holds the scene's coordinates
+    data = {"origin": [0.0, 0.0], **data}
     _expect(data, "state", {"time", "last_move", "untracked", "penetration", "history",
-                            "shaking"})
+                            "shaking", "origin"})
+    try:
+        saved = np.array(data["origin"], dtype=float).reshape(2)
+    except (TypeError, ValueError):
+        raise CheckpointError("state.origin: not a point") from None
+    if not np.all(np.isfinite(saved)):
+        raise CheckpointError("state.origin: not a point")
+    shift = saved - model.__dict__.get("origin", np.zeros(2))
     arrays = {}
     for name in _STATE_ARRAYS:
         like = getattr(initial, name)
@@ -377,6 +390,10 @@ def _state(data, store, model, initial):
         if broken.min(initial=0) < 0 or broken.max(initial=0) > 1:
             raise CheckpointError("state.bolt_broken: not true or false")
         arrays["bolt_broken"] = broken.astype(bool)
+    if shift.any():  # the saved positions into this model's coordinates
+        for name in ("x", "centroid", "load_points", "spring_points", "bolt_points"):
+            if name in arrays:
+                arrays[name] = arrays[name] + shift
     return StepState(contacts=contacts, shaking=tuple(shaking), **arrays, **numbers)
 
 
