@@ -118,3 +118,16 @@ def test_a_checkpoint_of_before_the_origin_resumes_in_place(tmp_path):
     assert np.abs(result.displacement("sq")[-1]).max() < 0.05
     np.testing.assert_allclose(resumed.frame().vertices, reference.frame().vertices, rtol=0,
                                atol=1e-9)
+
+
+def test_the_potential_energy_is_measured_from_the_scenes_y_0():
+    """A 1 m block of 1000 kg/m^3 under g = 10 at y = 101 (the model's origin at 102) has
+    rho g A y_c = 1.015e6 J/m, as at y = 99 with none (it read -5000 J/m)."""
+    rock = LinearElastic(young=5e9, poisson=0.25, density=1000.0)
+    for y in (99.0, 101.0, 5e6):
+        scene = dda.Scene(gravity=10.0)
+        scene.add_block([(0, y), (1, y), (1, y + 1), (0, y + 1)], rock)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", dda.PlausibilityWarning)
+            sim = dda.Simulation(scene, dt=1e-3)
+        assert sim.energy().potential == pytest.approx(1e4 * (y + 0.5), rel=1e-12)
