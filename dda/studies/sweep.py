@@ -30,6 +30,7 @@ import csv
 import inspect
 import itertools
 import math
+import pickle
 import sys
 import threading
 import time
@@ -168,12 +169,12 @@ def _warm_up(case: Case) -> None:
     key = (type(case.study).__qualname__, case.study.name, repr(case.settings.get("solver")))
     if key in _WARMED:
         return
-    _WARMED.add(key)
     try:
         sim, duration, _ = case.study.prepare(**case.settings)
         sim.run(min(duration, WARM_UP_STEPS * sim.dt), progress=False)
     except Exception:  # noqa: BLE001 - the timed run meets it again and reports it
-        pass
+        return  # (not warmed: a case with bad settings leaves the next good one to do it)
+    _WARMED.add(key)
 
 
 def _run_case(case: Case) -> dict:
@@ -313,11 +314,13 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
     bar = tqdm(total=len(cases), unit="case", file=sys.stderr, disable=not progress,
                mininterval=0.0, miniters=1)  # (each case shown: they are few and slow)
     try:
-        futures = {executor.submit(run_case, c): i for i, c in enumerate(cases)}
+        futures = {executor.submit(_run_case_or_error, c): i for i, c in enumerate(cases)}
         for fut in as_completed(futures):
             i = futures[fut]
             try:
                 rows[i] = fut.result()
+                if isinstance(rows[i], _CaseRaised):
+                    raise rows[i].exception
             except Exception as exc:
                 where = f"sweep: case {i} ({_settings_text(cases[i])})"
                 if on_error == "raise":
@@ -339,6 +342,28 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
                       f"{rows[first]['status'][len('not run: '):]}", RuntimeWarning,
                       stacklevel=2)
     return SweepRows(rows)
+
+
+@dataclass
+class _CaseRaised:
+    """What a case raised, sent back from the worker as a value: an exception that does not
+    unpickle, raised in a worker process, broke the pool and every case after it."""
+
+    exception: BaseException
+
+
+def _run_case_or_error(case: Case):
+    """:func:`run_case`, or a :class:`_CaseRaised` with what it raised, made safe to send
+    back (an exception that does not survive pickling becomes a RuntimeError with its
+    type's name and message)."""
+    try:
+        return run_case(case)
+    except Exception as exc:  # noqa: BLE001 - every case's failure is the caller's to judge
+        try:
+            pickle.loads(pickle.dumps(exc))
+        except Exception:  # noqa: BLE001 - any failure to pickle or unpickle
+            exc = RuntimeError(f"{type(exc).__name__}: {exc}")
+        return _CaseRaised(exc)
 
 
 def _settings_text(case: Case) -> str:
