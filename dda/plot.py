@@ -561,9 +561,13 @@ def animate_to(outs, pvd, field: str = "displacement", fps: float = 10.0, size=(
     frames = _Frames([f for _, f in entries], field, size, relative_to)
     for out in outs:
         out.parent.mkdir(parents=True, exist_ok=True)
-    movies = [iio.get_writer(out, format="FFMPEG", fps=fps, macro_block_size=16)
+    # each file is written under a temporary name and renamed once whole: an animation cut
+    # short (Ctrl-C, an error) left a valid but short MP4 in the place of the last good one
+    parts = {out: out.with_name(f"{out.stem}.part{out.suffix}") for out in outs}
+    movies = [iio.get_writer(parts[out], format="FFMPEG", fps=fps, macro_block_size=16)
               for out in outs if out.suffix.lower() == ".mp4"]
     gif_frames = []
+    done = False
     try:
         for t, f in entries:
             image = frames.image(f, t)
@@ -573,11 +577,23 @@ def animate_to(outs, pvd, field: str = "displacement", fps: float = 10.0, size=(
                 from PIL import Image
 
                 gif_frames.append(Image.fromarray(image).convert("P", palette=Image.ADAPTIVE))
-    finally:
         for movie in movies:
             movie.close()
-    for out in outs:
-        if out.suffix.lower() == ".gif":
-            gif_frames[0].save(out, save_all=True, append_images=gif_frames[1:], loop=0,
-                               duration=int(round(1000.0 / fps)))
+        for out in outs:
+            if out.suffix.lower() == ".gif":
+                gif_frames[0].save(parts[out], format="GIF", save_all=True,
+                                   append_images=gif_frames[1:], loop=0,
+                                   duration=int(round(1000.0 / fps)))
+        for out in outs:
+            os.replace(parts[out], out)
+        done = True
+    finally:
+        if not done:
+            for movie in movies:
+                try:
+                    movie.close()
+                except Exception:  # noqa: BLE001 - closed already, or broken: it goes anyway
+                    pass
+            for part in parts.values():
+                part.unlink(missing_ok=True)
     return outs

@@ -527,6 +527,8 @@ def test_render_refuses_bad_animation_settings_before_drawing(series, tmp_path, 
         assert main(["render", str(pvd), "--gif", str(tmp_path / "a.gif"), *option]) == 2
         assert "animate: " in capsys.readouterr().err
     assert not (tmp_path / "a.gif").exists()
+    assert main(["render", str(pvd), "--gif", str(tmp_path / "a.mp4")]) == 2
+    assert "--gif" in capsys.readouterr().err and not (tmp_path / "a.mp4").exists()
 
 
 def test_render_draws_a_gif_and_an_mp4_of_the_frames_asked_for(series, tmp_path, monkeypatch):
@@ -592,3 +594,31 @@ def test_the_blocks_outlines_are_drawn_whole(tmp_path, rock):
             darkest = picture[rows][:, col - 1:col + 2].sum(axis=2).min(axis=1)
             drawn = np.mean(darkest < face - 50.0)  # darker than the face, and the white
             assert drawn > 0.95, (block, x, drawn)
+
+
+def test_an_animation_cut_short_leaves_the_last_good_files(series, tmp_path, monkeypatch):
+    """Cut short while drawing (Ctrl-C, an error), the MP4 it was writing replaced the last
+    good one with a valid 2-frame file; now the files are written whole or not at all."""
+    import imageio.v3 as iio
+    from PIL import Image
+
+    from dda.plot import _Frames
+
+    _, pvd = series
+    gif, mp4 = tmp_path / "a.gif", tmp_path / "a.mp4"
+    plot.animate_to([gif, mp4], pvd)
+    image, calls = _Frames.image, []
+
+    def fails_at_the_third(self, f, t):
+        calls.append(t)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return image(self, f, t)
+
+    monkeypatch.setattr(_Frames, "image", fails_at_the_third)
+    with pytest.raises(KeyboardInterrupt):
+        plot.animate_to([gif, mp4], pvd)
+    assert len(list(iio.imiter(mp4, plugin="FFMPEG"))) == 11
+    with Image.open(gif) as im:
+        assert im.n_frames == 11
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.mp4"]
