@@ -309,17 +309,20 @@ class Simulation:
                 self._steps(result, t_end, recorder, writer, checkpoint, watchers,
                             interrupts)
             except SimulationError as exc:
-                recorder.stop(self.committed)
+                self._stop_recording(recorder)
                 exc.result = result
                 raise
             except KeyboardInterrupt:
-                recorder.stop(self.committed)
+                self._stop_recording(recorder)
                 if checkpoint is not None:  # the committed state is whole: keep it
                     self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
                 if bar:
                     bar.close()
                     bar = None
                 print(self._stopped(checkpoint), file=sys.stderr, flush=True)
+                raise
+            except Exception:  # a callback's, or a writer's: the steps done are written
+                self._stop_recording(recorder)
                 raise
             finally:
                 if kernels.done:
@@ -330,6 +333,16 @@ class Simulation:
                 if writer is not None:
                     writer.close()
         return result
+
+    def _stop_recording(self, recorder) -> None:
+        """Record and write the last committed state of a run stopped early
+        (:meth:`Recorder.stop`), and remember it as written: a run that goes on must not
+        write it again. A writer that fails here does not hide why the run stopped."""
+        try:
+            recorder.stop(self.committed)
+        except Exception:  # noqa: BLE001 - the run's own exception is the one to raise
+            return
+        self._written = recorder.written
 
     def _stopped(self, checkpoint) -> str:
         """The line an interrupted run prints: when it stopped and how to go on."""

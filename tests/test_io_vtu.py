@@ -347,7 +347,7 @@ def test_pyvista_draws_the_force_vectors_as_arrows(run_with_output):
     assert arrows.bounds[2] >= low - 1e-3
 
 
-@pytest.mark.parametrize("how", ["interrupt", "cannot go on"])
+@pytest.mark.parametrize("how", ["interrupt", "cannot go on", "a callback's error"])
 def test_a_stopped_thinned_series_ends_where_the_run_stopped(tmp_path, rock, how):
     """A run with VTUWriter(every=5) stopped after its 13th step (Ctrl-C, or a step that
     cannot go on) writes its last committed state as the series' last frame; it ended at
@@ -355,15 +355,43 @@ def test_a_stopped_thinned_series_ends_where_the_run_stopped(tmp_path, rock, how
     writer = dda.io.VTUWriter(tmp_path / "case", every=5)
     sim = dda.Simulation(_two_blocks(rock), dt=1e-3)
 
+    raised = {"interrupt": KeyboardInterrupt, "cannot go on": dda.SimulationError,
+              "a callback's error": ValueError}[how]
+
     def stop(state, report):
         if state.time > 0.0125:
-            if how == "interrupt":
-                raise KeyboardInterrupt
-            raise dda.SimulationError("stopped by the test")
+            raise raised("stopped by the test")
 
-    with pytest.raises(KeyboardInterrupt if how == "interrupt" else dda.SimulationError):
+    with pytest.raises(raised):
         sim.run(0.05, output=writer, callback=stop)
     times = [float(e.get("timestep")) for e in
              ET.parse(writer.pvd_path).getroot().findall("./Collection/DataSet")]
     assert sim.committed.time == pytest.approx(0.013)
     np.testing.assert_allclose(times, [0.0, 0.005, 0.010, 0.013], atol=1e-12)
+
+
+def test_a_run_that_goes_on_after_a_stop_does_not_write_its_frame_again(rock):
+    """The stopped state's frame, written at the stop, was written again by the next run of
+    the same simulation for a writer without last_time (any write/close object)."""
+
+    class Times:
+        def __init__(self):
+            self.times = []
+
+        def write(self, frame, last=False):
+            self.times.append(frame.time)
+
+        def close(self):
+            pass
+
+    writer = Times()
+    sim = dda.Simulation(_two_blocks(rock), dt=2e-3, record_every=3)
+
+    def stop(state, report):
+        if state.time > 0.021:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sim.run(0.05, output=writer, callback=stop)
+    sim.run(0.01, output=writer)
+    assert np.all(np.diff(writer.times) > 0), writer.times
