@@ -499,3 +499,23 @@ def test_a_loaded_scene_given_to_simulation_says_what_to_pass(tmp_path):
     with pytest.raises(TypeError, match=r"LoadedScene: pass its \.scene, or call its "
                                         r"\.simulation\(\)"):
         dda.Simulation(loaded, dt=1e-3)
+
+
+@pytest.mark.parametrize("value", [
+    '"top [v2"',
+    "'''it's [v2'''",
+    '"""\\\n  top [v2\n  # [ not a comment\n"""',
+    "'''\n[simulation]\n'''",
+    '"a \\" [ b"',
+])
+def test_keys_after_a_string_with_brackets_keep_their_lines(value):
+    """Brackets, quotes and table headers inside strings, one-line or multi-line, basic or
+    literal, open nothing (a triple-quoted one still cost every later key its line)."""
+    import tomllib
+
+    text = f'[[blocks]]\nname = {value}\nmaterial = "stone"\n\n[simulation]\ndt = 2e-3\n'
+    tomllib.loads(text)  # valid TOML
+    lines = key_lines(text)
+    rows = text.splitlines()
+    assert lines[("simulation",)] == len(rows) - 1 and lines[("simulation", "dt")] == len(rows)
+    assert lines[("blocks", 0, "material")] == len(rows) - 3

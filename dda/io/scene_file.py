@@ -308,9 +308,11 @@ def key_lines(text: str) -> dict[tuple, int]:
     counts: dict[tuple, int] = {}
     table: tuple = ()
     depth = 0  # open brackets of a multi-line value
+    open_string = None  # the delimiter of a multi-line string the line starts inside
     for number, raw in enumerate(text.splitlines(), start=1):
-        line = _code_of(raw)
-        if depth == 0:
+        inside = open_string is not None
+        line, open_string = _code_of(raw, open_string)
+        if depth == 0 and not inside:
             m = _HEADER.match(raw)
             if m and not _KEY.match(raw):
                 path = tuple(_split_key(m.group(2)))
@@ -330,26 +332,35 @@ def key_lines(text: str) -> dict[tuple, int]:
     return lines
 
 
-def _code_of(raw: str) -> str:
+def _code_of(raw: str, open_string: str | None = None) -> tuple[str, str | None]:
     """A TOML line's code: its strings emptied and its comment cut off, so that a bracket in
     either (``name = "base"  # see [Adachi 2017``) is not counted as one that opens a
-    value (every later line lost its number)."""
-    out, quote, i = [], None, 0
+    value (every later line lost its number). ``open_string`` is the delimiter of a
+    multi-line string (''' or \"\"\") the line starts inside; returns the code and the
+    delimiter of a multi-line string still open at its end (None if none)."""
+    out, quote, i = [], open_string, 0
     while i < len(raw):
-        ch = raw[i]
         if quote is None:
+            ch = raw[i]
             if ch == "#":
                 break
+            if raw.startswith('"""', i) or raw.startswith("'''", i):
+                quote, i = raw[i:i + 3], i + 3
+                out.append(quote[0])
+                continue
             if ch in "\"'":
                 quote = ch
             out.append(ch)
-        elif ch == "\\" and quote == '"':
+        elif raw[i] == "\\" and quote[0] == '"':
             i += 1  # an escaped character of a basic string
-        elif ch == quote:
+        elif raw.startswith(quote, i):
+            i += len(quote) - 1
             quote = None
-            out.append(ch)
+            out.append(raw[i])
         i += 1
-    return "".join(out)
+    if quote is not None and len(quote) == 1:  # a one-line string left open: not TOML
+        quote = None
+    return "".join(out), quote
 
 
 # ---------------------------------------------------------------------- reading
