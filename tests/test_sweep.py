@@ -273,6 +273,16 @@ def rows_for_fronts():
     ]
 
 
+def test_fronts_pass_over_rows_without_the_measure():
+    """A failed or not-run row has no study measures beyond "error": a front by another
+    measure raised KeyError on it."""
+    rows = [{"cpu_time": 1.0, "error": 0.2, "peak": 0.1},
+            {"cpu_time": 0.5, "error": math.nan, "status": "not run: ValueError: x"},
+            {"cpu_time": 2.0, "error": 0.01, "peak": 0.005}]
+    assert [r["cpu_time"] for r in pareto_front(rows, error="peak")] == [1.0, 2.0]
+    assert cheapest(rows, 0.01, error="peak")["cpu_time"] == 2.0
+
+
 def test_pareto_front_and_cheapest():
     rows = rows_for_fronts()
     assert [r["cpu_time"] for r in pareto_front(rows)] == [1.0, 2.0, 4.0]

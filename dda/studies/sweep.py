@@ -293,7 +293,8 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
         Per case: ``study``, the settings, ``error`` (relative, NaN for a failed run),
         ``cpu_time`` and ``wall_time`` (s, of the run alone: each worker first runs
         :data:`WARM_UP_STEPS` untimed steps of its first case of each study and solver, so
-        that loading the compiled kernels is not charged to it), ``steps``, ``iterations``,
+        that loading the compiled kernels is not charged to it; that calls the study's
+        ``prepare`` once more), ``steps``, ``iterations``,
         ``open_close_passes``, ``solves``, ``dt_cuts``, ``slip_reversals`` (steps ended at a
         slip reversal, :mod:`dda.slip_events`), ``contacts_max``, ``status`` ("ok" or
         why it stopped) and the seconds per part of the step (``detection_time`` ...).
@@ -432,7 +433,7 @@ def pareto_front(rows: Sequence[dict], cost: str = "cpu_time",
     >>> [r["cpu_time"] for r in pareto_front(rows)]
     [1, 3]
     """
-    ok = [r for r in rows if np.isfinite(r[error])]
+    ok = [r for r in rows if np.isfinite(r.get(error, math.nan))]  # (failed: no measures)
     ok.sort(key=lambda r: (r[cost], abs(r[error])))
     front, best = [], math.inf
     for r in ok:
@@ -445,5 +446,5 @@ def pareto_front(rows: Sequence[dict], cost: str = "cpu_time",
 def cheapest(rows: Sequence[dict], tolerance: float, cost: str = "cpu_time",
              error: str = "error") -> dict | None:
     """The cheapest row whose ``|error|`` is at most ``tolerance`` (None if there is none)."""
-    ok = [r for r in rows if np.isfinite(r[error]) and abs(r[error]) <= tolerance]
+    ok = [r for r in rows if np.isfinite(r.get(error, math.nan)) and abs(r[error]) <= tolerance]
     return min(ok, key=lambda r: r[cost]) if ok else None
