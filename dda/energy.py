@@ -69,9 +69,13 @@ def energy(sim, state=None) -> Energy:
     mass = geometry.mass_matrices(ints, model.density)
     kinetic = 0.5 * float(np.einsum("bi,bij,bj->", st.velocity, mass, st.velocity))
     g = model.gravity or 0.0
-    # from y = 0 of the scene's coordinates (the model's start at its origin)
-    y = ints.centroid[:, 1] + model.__dict__.get("origin", np.zeros(2))[1]
-    potential = float(np.sum(g * model.density * ints.area * y))
+    # from y = 0 of the scene's coordinates: about the model's origin, plus the constant
+    # of each block's mass at the origin's height (a far scene's area, which strain
+    # changes, times its y of 4e6 m made energy that never was)
+    potential = float(np.sum(g * model.density * ints.area * ints.centroid[:, 1]))
+    origin_y = float(model.__dict__.get("origin", np.zeros(2))[1])
+    if origin_y:
+        potential += float(np.sum(g * model.density * model.size**2)) * origin_y
     compliance = np.linalg.inv(model.elasticity)
     strain = 0.5 * float(np.einsum("b,bi,bij,bj->", ints.area, st.stress, compliance,
                                    st.stress))
