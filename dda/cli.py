@@ -116,16 +116,16 @@ def cmd_demo(args):
 def cmd_render(args):
     from dda import plot
 
+    for option, name in (("--gif", args.gif), ("--mp4", args.mp4)):
+        if name and Path(name).suffix.lower() != f".{option[2:]}":
+            raise ValueError(f"{option} {name}: the file name must end in "
+                             f".{option[2:]}")
     if not (args.png or args.gif or args.mp4):
         args.png = str(Path(args.pvd).with_suffix(".png"))
     if args.png:
         png = plot.render_frame(args.pvd, args.png, frame=args.frame, field=args.field,
                                 relative_to=args.relative_to)
         print(f"wrote {png}")
-    for option, name in (("--gif", args.gif), ("--mp4", args.mp4)):
-        if name and Path(name).suffix.lower() != f".{option[2:]}":
-            raise ValueError(f"{option} {name}: the file name must end in "
-                             f".{option[2:]}")
     movies = [m for m in (args.gif, args.mp4) if m]
     if movies:  # each frame drawn once for both
         for made in plot.animate_to(movies, args.pvd, field=args.field, fps=args.fps,

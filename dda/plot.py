@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import sys
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -563,7 +564,12 @@ def animate_to(outs, pvd, field: str = "displacement", fps: float = 10.0, size=(
         out.parent.mkdir(parents=True, exist_ok=True)
     # each file is written under a temporary name and renamed once whole: an animation cut
     # short (Ctrl-C, an error) left a valid but short MP4 in the place of the last good one
-    parts = {out: out.with_name(f"{out.stem}.part{out.suffix}") for out in outs}
+    parts = {}
+    for out in outs:  # (a name of its own: a user's "x.part.mp4" is left alone)
+        handle, name = tempfile.mkstemp(suffix=out.suffix, prefix=f".{out.stem}.",
+                                        dir=out.parent)
+        os.close(handle)
+        parts[out] = Path(name)
     movies = [iio.get_writer(parts[out], format="FFMPEG", fps=fps, macro_block_size=16)
               for out in outs if out.suffix.lower() == ".mp4"]
     gif_frames = []

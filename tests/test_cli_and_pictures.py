@@ -607,6 +607,7 @@ def test_an_animation_cut_short_leaves_the_last_good_files(series, tmp_path, mon
     _, pvd = series
     gif, mp4 = tmp_path / "a.gif", tmp_path / "a.mp4"
     plot.animate_to([gif, mp4], pvd)
+    (tmp_path / "a.part.mp4").write_bytes(b"the user's")  # not the animation's to touch
     image, calls = _Frames.image, []
 
     def fails_at_the_third(self, f, t):
@@ -621,4 +622,5 @@ def test_an_animation_cut_short_leaves_the_last_good_files(series, tmp_path, mon
     assert len(list(iio.imiter(mp4, plugin="FFMPEG"))) == 11
     with Image.open(gif) as im:
         assert im.n_frames == 11
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.mp4"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.mp4", "a.part.mp4"]
+    assert (tmp_path / "a.part.mp4").read_bytes() == b"the user's"

@@ -519,3 +519,17 @@ def test_keys_after_a_string_with_brackets_keep_their_lines(value):
     rows = text.splitlines()
     assert lines[("simulation",)] == len(rows) - 1 and lines[("simulation", "dt")] == len(rows)
     assert lines[("blocks", 0, "material")] == len(rows) - 3
+
+
+@pytest.mark.parametrize("value", ['["""x""""]', "['''x''''']", '["""x\ny""""]'])
+def test_a_multi_line_string_ends_at_the_last_three_of_its_quotes(value):
+    """Four or five quotes end a multi-line string at the last three (the string then holds
+    one or two of them): closed at the first three, the fourth opened a string that took the
+    array's ']' and every later key lost its line."""
+    import tomllib
+
+    text = f"a = {value}\nb = 1\n[t]\nc = 2\n"
+    tomllib.loads(text)  # valid TOML
+    rows = len(text.splitlines())
+    assert key_lines(text) == {("a",): 1, ("b",): rows - 2, ("t",): rows - 1,
+                               ("t", "c"): rows}

@@ -229,6 +229,13 @@ def test_an_exception_that_does_not_unpickle_stays_in_its_case():
         rows = sweep(cases, executor=pool, progress=False)
     assert [r["status"] for r in rows] == ["ok", "not run: RuntimeError: TwoArgError: first "
                                            "and second", "ok", "ok"]
+    # raised, it keeps its worker's traceback as its cause; in threads it is itself
+    with ProcessPoolExecutor(1) as pool, pytest.raises(RuntimeError) as info:
+        sweep(cases[:2], executor=pool, progress=False, on_error="raise")
+    assert "in prepare" in str(info.value.__cause__) and "TwoArgError" in str(
+        info.value.__cause__)
+    with pytest.raises(TwoArgError):
+        sweep(cases[:2], executor=ThreadPoolExecutor(1), progress=False, on_error="raise")
 
 
 def test_a_case_that_fails_leaves_the_warm_up_to_the_next(monkeypatch):

@@ -329,10 +329,11 @@ def _state(data, store, model, initial):
     data = {"origin": [0.0, 0.0], **data}
     _expect(data, "state", {"time", "last_move", "untracked", "penetration", "history",
                             "shaking", "origin"})
-    try:
-        saved = np.array(data["origin"], dtype=float).reshape(2)
-    except (TypeError, ValueError):
-        raise CheckpointError("state.origin: not a point") from None
+    raw = data["origin"]
+    if not (isinstance(raw, list) and len(raw) == 2 and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in raw)):
+        raise CheckpointError("state.origin: not a point")
+    saved = np.array(raw, dtype=float)
     if not np.all(np.isfinite(saved)):
         raise CheckpointError("state.origin: not a point")
     shift = saved - model.__dict__.get("origin", np.zeros(2))

@@ -354,7 +354,11 @@ def _code_of(raw: str, open_string: str | None = None) -> tuple[str, str | None]
         elif raw[i] == "\\" and quote[0] == '"':
             i += 1  # an escaped character of a basic string
         elif raw.startswith(quote, i):
-            i += len(quote) - 1
+            run = len(quote)
+            if run == 3:  # a multi-line string ends at the last three of 3 to 5 quotes
+                while run < 5 and raw.startswith(quote[0], i + run):
+                    run += 1
+            i += run - 1
             quote = None
             out.append(raw[i])
         i += 1

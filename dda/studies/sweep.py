@@ -34,10 +34,11 @@ import pickle
 import sys
 import threading
 import time
+import traceback
 import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor, as_completed
+from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -315,13 +316,17 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
     bar = tqdm(total=len(cases), unit="case", file=sys.stderr, disable=not progress,
                mininterval=0.0, miniters=1)  # (each case shown: they are few and slow)
     try:
-        futures = {executor.submit(_run_case_or_error, c): i for i, c in enumerate(cases)}
+        # threads share this process: a case's exception comes back as it is; elsewhere
+        # (processes, a Dask cluster) it comes back as a value with its worker's traceback
+        task = run_case if isinstance(executor, ThreadPoolExecutor) else _run_case_or_error
+        futures = {executor.submit(task, c): i for i, c in enumerate(cases)}
         for fut in as_completed(futures):
             i = futures[fut]
             try:
                 rows[i] = fut.result()
                 if isinstance(rows[i], _CaseRaised):
-                    raise rows[i].exception
+                    raised = rows[i]
+                    raise raised.exception from _WorkerTraceback(raised.traceback)
             except Exception as exc:
                 where = f"sweep: case {i} ({_settings_text(cases[i])})"
                 if on_error == "raise":
@@ -347,10 +352,19 @@ def sweep(cases: Sequence[Case], executor: Executor | None = None,
 
 @dataclass
 class _CaseRaised:
-    """What a case raised, sent back from the worker as a value: an exception that does not
-    unpickle, raised in a worker process, broke the pool and every case after it."""
+    """What a case raised in a worker, sent back as a value with its traceback's text: an
+    exception that does not unpickle, raised there, broke the pool and every case after
+    it."""
 
     exception: BaseException
+    traceback: str
+
+
+class _WorkerTraceback(Exception):
+    """The traceback of a case's exception in its worker (the raised exception's cause)."""
+
+    def __str__(self):
+        return "\n" + (self.args[0] if self.args else "")
 
 
 def _run_case_or_error(case: Case):
@@ -360,11 +374,12 @@ def _run_case_or_error(case: Case):
     try:
         return run_case(case)
     except Exception as exc:  # noqa: BLE001 - every case's failure is the caller's to judge
+        text = "".join(traceback.format_exception(exc))
         try:
             pickle.loads(pickle.dumps(exc))
         except Exception:  # noqa: BLE001 - any failure to pickle or unpickle
             exc = RuntimeError(f"{type(exc).__name__}: {exc}")
-        return _CaseRaised(exc)
+        return _CaseRaised(exc, text)
 
 
 def _settings_text(case: Case) -> str:
