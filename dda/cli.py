@@ -363,7 +363,9 @@ def main(argv=None) -> int:
     p.add_argument("--gif", help="animation, GIF")
     p.add_argument("--mp4", help="animation, MP4 (H.264; needs dda[vis])")
     p.add_argument("--field", default="displacement", help="cell field to colour by: "
-                   "displacement, velocity, rotation, stress, ... (its unit may be left out)")
+                   "displacement, velocity, rotation, stress, ... (its unit may be left out; "
+                   "a vector's magnitude, or one part: displacement:x, velocity:y, stress:sx, "
+                   "sy, txy, mean, s1, s2, tmax)")
     p.add_argument("--relative-to", default="auto", metavar="BLOCK", help="colour "
                    "displacement, velocity or rotation relative to this block's: its name or "
                    "its block_id (a block's name if a block has it, else an integer is a "

@@ -275,12 +275,47 @@ def _file_reference(mesh, names, relative_to, file="the file") -> int | None:
     return int(relative_to)
 
 
+def _principal(v, sign):
+    """A principal stress of [sx, sy, txy] rows: the mean plus (sign 1) or minus the radius
+    of Mohr's circle."""
+    return 0.5 * (v[:, 0] + v[:, 1]) + sign * _mohr_radius(v)
+
+
+def _mohr_radius(v):
+    """The largest in-plane shear stress of [sx, sy, txy] rows, sqrt(((sx - sy) / 2)^2 +
+    txy^2)."""
+    return np.hypot(0.5 * (v[:, 0] - v[:, 1]), v[:, 2])
+
+
+#: the parts of a field a picture may show (``"stress:s1"``, ``"displacement:x"``); without
+#: one, a vector's magnitude. Stresses tension positive, as the files hold them.
+_PARTS = {
+    "stress": {"sx": lambda v: v[:, 0], "sy": lambda v: v[:, 1], "txy": lambda v: v[:, 2],
+               "mean": lambda v: 0.5 * (v[:, 0] + v[:, 1]),
+               "s1": lambda v: _principal(v, 1.0), "s2": lambda v: _principal(v, -1.0),
+               "tmax": _mohr_radius},
+    "displacement": {"x": lambda v: v[:, 0], "y": lambda v: v[:, 1]},
+    "velocity": {"x": lambda v: v[:, 0], "y": lambda v: v[:, 1]},
+}
+
+
+def _field_part(field: str) -> tuple[str, str | None]:
+    """``"stress:s1"`` -> ``("stress", "s1")``; a field without a part -> (field, None)."""
+    if ":" in field:
+        name, part = field.rsplit(":", 1)
+        return name.strip(), part.strip()
+    return field, None
+
+
 def _colour_mesh(pv, file, field, relative_to=None):
     """The block cells of ``file`` with cell data ``shown``, the magnitude of ``field`` (in
-    the file's unit) relative to the block ``relative_to`` names (:func:`_file_reference`),
-    and what was shown: ``{"field": the array's name, "vector": whether it has components,
-    "reference": block_id or None, "reference_name": its name or None}``."""
+    the file's unit), or the part it names after a colon (:data:`_PARTS`: ``"stress:s1"``,
+    ``"displacement:x"``), relative to the block ``relative_to`` names
+    (:func:`_file_reference`), and what was shown: ``{"field": the array's name, "vector":
+    whether a magnitude is shown, "part": the part or None, "reference": block_id or None,
+    "reference_name": its name or None}``."""
     mesh, names = _blocks_of(pv, file)
+    field, part = _field_part(field)
     key = _field_key(_block_fields(mesh), field, file)
     base = _split_unit(key)[0]
     if base not in _RELATIVE_FIELDS and relative_to is not None and not (
@@ -293,9 +328,18 @@ def _colour_mesh(pv, file, field, relative_to=None):
     if ref is not None:
         ids = np.asarray(mesh.cell_data["block_id"])
         values = values - values[np.flatnonzero(ids == ref)[0]]
-    mesh.cell_data["shown"] = np.linalg.norm(values, axis=1) if vector else values
+    if part is not None:
+        parts = _PARTS.get(base, {})
+        if part not in parts:
+            have = (f"its parts: {', '.join(parts)}" if parts else "it has no parts")
+            raise ValueError(f"{base!r} has no part {part!r} ({have})")
+        mesh.cell_data["shown"] = parts[part](values)
+        vector = False
+    else:
+        mesh.cell_data["shown"] = np.linalg.norm(values, axis=1) if vector else values
     name = names[ref] if ref is not None and ref < len(names) else None
-    return mesh, {"field": key, "vector": vector, "reference": ref, "reference_name": name}
+    return mesh, {"field": key, "vector": vector, "part": part, "reference": ref,
+                  "reference_name": name}
 
 
 def _blocks_mesh(pv, file, field, relative_to=None):
@@ -355,6 +399,8 @@ class _Frames:
         self.cmap = "coolwarm" if self.signed else "viridis"
         self.size = tuple(int(s) for s in size)
         quantity = f"|{base}|" if info["vector"] else base
+        if info.get("part"):
+            quantity += f" {info['part']}"
         if info["reference"] is not None:
             name = info["reference_name"] or f"block {info['reference']}"
             quantity += f" relative to {name}"
@@ -484,7 +530,11 @@ def render_frame(pvd, png, frame: int = -1, field: str = "displacement",
         Which frame (an index into the series; default the last).
     field : str
         ``"displacement"``, ``"velocity"``, ``"rotation"``, ``"stress"``, ...: a cell field
-        of the blocks, by its name with or without its unit (``"displacement [m]"``).
+        of the blocks, by its name with or without its unit (``"displacement [m]"``); a
+        vector's magnitude, or after a colon one part: ``"displacement:x"``, ``:y``; for
+        stress (tension positive) ``"stress:sx"``, ``sy``, ``txy``, ``mean`` ((sx + sy) /
+        2), ``s1`` and ``s2`` (the principal stresses, largest first) or ``tmax`` (the
+        largest in-plane shear).
     size : (int, int)
         Width and height of the picture, pixels.
     relative_to : "auto", str, int or None

@@ -624,3 +624,34 @@ def test_an_animation_cut_short_leaves_the_last_good_files(series, tmp_path, mon
         assert im.n_frames == 11
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "a.mp4", "a.part.mp4"]
     assert (tmp_path / "a.part.mp4").read_bytes() == b"the user's"
+
+
+def test_a_part_of_a_field_is_shown_by_name(series):
+    """``stress:s1`` and the other parts: the values the files hold, combined as named (the
+    norm of [sx, sy, txy] was the only stress picture); ``displacement:x`` relative to the
+    table; an unknown part lists the known ones."""
+    import meshio
+
+    from dda.plot import _blocks_mesh, _Frames, _pyvista
+
+    _, pvd = series
+    last = plot.read_pvd(pvd)[-1][1]
+    mesh = meshio.read(last)
+    kind = np.concatenate(mesh.cell_data["kind"])
+    stress = np.concatenate(mesh.cell_data["stress [Pa]"])[kind == 0]
+    sx, sy, txy = stress.T
+    radius = np.hypot((sx - sy) / 2, txy)
+    expected = {"sx": sx, "sy": sy, "txy": txy, "mean": (sx + sy) / 2,
+                "s1": (sx + sy) / 2 + radius, "s2": (sx + sy) / 2 - radius, "tmax": radius}
+    for part, values in expected.items():
+        shown = _blocks_mesh(_pyvista(), last, f"stress:{part}").cell_data["shown"]
+        np.testing.assert_allclose(shown, values, rtol=1e-12, atol=1e-9)
+    frames = _Frames([last, last], "stress:s1", (640, 480))
+    assert frames.title.startswith("stress s1 [")
+    x = _blocks_mesh(_pyvista(), last, "displacement:x", "auto").cell_data["shown"]
+    both = _blocks_mesh(_pyvista(), last, "displacement", "auto").cell_data["shown"]
+    assert np.all(np.abs(x) <= both + 1e-15) and np.abs(x).max() > 0.5 * both.max()
+    with pytest.raises(ValueError, match=r"'stress' has no part 's3' \(its parts: sx, sy"):
+        _blocks_mesh(_pyvista(), last, "stress:s3")
+    with pytest.raises(ValueError, match="'rotation' has no part 'x' .it has no parts"):
+        _blocks_mesh(_pyvista(), last, "rotation:x")
