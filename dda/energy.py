@@ -73,7 +73,7 @@ def energy(sim, state=None) -> Energy:
     # of each block's mass at the origin's height (a far scene's area, which strain
     # changes, times its y of 4e6 m made energy that never was)
     potential = float(np.sum(g * model.density * ints.area * ints.centroid[:, 1]))
-    origin_y = float(model.__dict__.get("origin", np.zeros(2))[1])
+    origin_y = float(model.origin[1])
     if origin_y:
         potential += float(np.sum(g * model.density * model.size**2)) * origin_y
     compliance = np.linalg.inv(model.elasticity)

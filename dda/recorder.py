@@ -33,8 +33,8 @@ def frame(model, state) -> Frame:
         point, normal = g.p1, g.normal
     else:
         point = normal = np.zeros((0, 2))
-    origin = model.__dict__.get("origin")
-    shift = origin is not None and origin.any()  # back to the scene's coordinates
+    origin = model.origin
+    shift = origin.any()  # back to the scene's coordinates
     if shift:
         point = point + origin
     return Frame(

@@ -293,7 +293,7 @@ class Simulation:
         result = Result(self.scene, [b.name for b in self.scene.blocks],
                         record_every=self.record_every, settings=self._run_settings(),
                         initial_centroid=self.model.centroid_initial
-                        + self.model.__dict__.get("origin", 0.0))
+                        + self.model.origin)
         bar = self._progress_bar(progress, t_end, result.stats)
         recorder = Recorder(self.model, result, writer, self.record_every, self._written)
         recorder.start(self.committed)

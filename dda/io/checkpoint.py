@@ -70,7 +70,7 @@ def checkpoint_payload(simulation, writer, end: float, path, every: int) -> byte
             "scene": scene_to_data(simulation.scene, store),
             "simulation": _simulation_to_data(simulation, store),
             "state": _state_to_data(simulation.committed, store,
-                                    simulation.model.__dict__.get("origin")),
+                                    simulation.model.origin),
             "control": asdict(simulation.control),
             "warned": sorted(simulation.advisor.warned),
             "writer": _writer_to_data(writer, Path(path)),
@@ -336,7 +336,7 @@ def _state(data, store, model, initial):
     saved = np.array(raw, dtype=float)
     if not np.all(np.isfinite(saved)):
         raise CheckpointError("state.origin: not a point")
-    shift = saved - model.__dict__.get("origin", np.zeros(2))
+    shift = saved - model.origin
     arrays = {}
     for name in _STATE_ARRAYS:
         like = getattr(initial, name)
