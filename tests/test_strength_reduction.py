@@ -465,3 +465,54 @@ def test_the_toppling_columns_example(tmp_path, capsys):
     assert "Goodman and Bray: F = 1.3034" in capsys.readouterr().out
     assert (tmp_path / "fos.png").stat().st_size > 10_000
     assert (tmp_path / "trials.csv").exists()
+
+
+def _bolted_incline(strength=700.0):
+    """The incline's 0.5 m block (phi 30, 25 degrees) held by a bolt 30 degrees up-slope from
+    the plane's inward normal, into the base; and the factor at which the limit equilibrium's
+    bolt force reaches ``strength``."""
+    phi, theta, b = 30.0, math.radians(25.0), math.radians(30.0)
+    scene, top, t = incline_scene(phi, slope_deg=25.0)
+    n = np.array([-math.sin(theta), math.cos(theta)])
+    e = -math.cos(b) * n + math.sin(b) * t
+    a = 2.75 * t + 0.2 * n
+    scene.add_bolt("top", tuple(a), "base", tuple(a + e), stiffness=1e7, strength=strength)
+    w, mu = 2500.0 * 9.81 * 0.25, math.tan(math.radians(phi))
+
+    def need(f):  # the bolt force that holds the block with tan(phi) / f
+        m = mu / f
+        return (w * math.sin(theta) - w * math.cos(theta) * m) / (math.sin(b) + math.cos(b) * m)
+
+    from scipy.optimize import brentq
+    return scene, brentq(lambda f: need(f) - strength, 1.0, 10.0)
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_a_bolt_that_can_break_is_judged_by_its_static_load(solver):
+    """A dynamic trial releases the block from rest onto its slack bolt, which kept about
+    twice its static force and broke at F 10% below the limit equilibrium's (legacy DDA's
+    default trials were dynamic: F = 1.426 against 1.588); "auto" is static for both
+    solvers where a bolt can break, and a dynamic trial says what it risks."""
+    scene, expected = _bolted_incline()
+    with ThreadPoolExecutor(2) as pool:
+        fos = dda.studies.strength_reduction(scene, executor=pool, solver=solver)
+    assert fos.plan.analysis == "static"
+    assert fos.factor == pytest.approx(expected, rel=0.01)
+    assert fos.notes == []
+    with ThreadPoolExecutor(2) as pool:
+        dynamic = dda.studies.strength_reduction(scene, executor=pool, solver=solver,
+                                                 criterion=Criterion(analysis="dynamic"))
+    assert dynamic.factor < 0.95 * expected  # what the note is about
+    assert any("twice its static force" in note for note in dynamic.notes)
+
+
+def test_a_load_that_changes_with_time_is_refused_by_name():
+    """A trial's pseudo time met a ramped load at an arbitrary point of its ramp (F 1.18 to
+    1.48 for one block as the ramp went from 5 to 100 s), silently."""
+    scene, top, _ = incline_scene(30.0, slope_deg=25.0)
+    scene.add_point_load("top", (2.5, 1.4), lambda t: (-100.0 * min(t / 5.0, 1.0), 0.0))
+    with pytest.raises(ValueError, match="point load on .*top.* changes with time"):
+        dda.studies.strength_reduction(scene, executor=ThreadPoolExecutor(1))
+    steady, _, _ = incline_scene(30.0, slope_deg=25.0)
+    steady.add_point_load("top", (2.5, 1.4), (-100.0, 0.0))
+    Criterion().plan(steady)  # a constant load is what a trial is judged at
