@@ -7,9 +7,12 @@ The energy of the blocks (METHOD.md section 1) and of the contact springs (secti
     strain     0.5 A sigma^T D^-1 sigma per block
     contact    0.5 t_n^2 / p_n + 0.5 t_s^2 / p_s per closed contact
     bolt       0.5 N^2 / k per intact bolt (:mod:`dda.bolts`; a break releases it)
+    water      int_A p dA over the free blocks, p the water pressure
+               (:func:`dda.water.water_energy`: the buoyancy's potential)
 
 Friction and Newmark's gamma = 1 only take energy out, so a run without loads, shaking or
-prescribed motion must never end with more than it started with (``tests/stability``).
+prescribed motion must never end with more than it started with (``tests/stability``); the
+water's pressure, a fixed field, is no exception: its work is the fall of its potential.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ import numpy as np
 from dda import geometry
 from dda.bolts import bolt_energy
 from dda.contact.contacts import OPEN
+from dda.water import water_energy
 
 __all__ = ["Energy", "energy"]
 
@@ -34,10 +38,12 @@ class Energy:
     strain: float
     contact: float
     bolt: float = 0.0
+    water: float = 0.0
 
     @property
     def total(self) -> float:
-        return self.kinetic + self.potential + self.strain + self.contact + self.bolt
+        return (self.kinetic + self.potential + self.strain + self.contact + self.bolt
+                + self.water)
 
 
 def energy(sim, state=None) -> Energy:
@@ -87,4 +93,7 @@ def energy(sim, state=None) -> Energy:
         contact = 0.5 * float(np.sum(c.t_n[closed] ** 2 / model.joints.normal_penalty[joint]
                                      + c.t_s[closed] ** 2 / model.joints.shear_penalty[joint]))
     bolt = bolt_energy(model.bolts, st.bolt_points, st.bolt_broken)
-    return Energy(kinetic, potential, strain, contact, bolt)
+    water = 0.0
+    if model.water is not None:
+        water = water_energy(model.water, st.x, model.topo.nxt, model.water_edges)
+    return Energy(kinetic, potential, strain, contact, bolt, water)
