@@ -85,12 +85,16 @@ class Recorder:
     every : record every this many steps
     written : ``(writer, time)`` of the last frame written by an earlier run of the same
         simulation: a run that goes on starts at that frame and must not write it twice
+    since : committed steps since the last one recorded by an earlier run that stopped
+        before its end (or a checkpoint's): a run that goes on keeps the cadence of one
+        never stopped
     """
 
-    def __init__(self, model, result, writer=None, every: int = 1, written=(None, None)):
+    def __init__(self, model, result, writer=None, every: int = 1, written=(None, None),
+                 since: int = 0):
         self.model, self.result, self.writer, self.every = model, result, writer, every
         self.written = written
-        self.since = 0
+        self.since = int(since) % every
 
     def start(self, state) -> None:
         """Record the state a run starts from."""
@@ -99,9 +103,11 @@ class Recorder:
     def committed(self, state, last: bool) -> None:
         """A step was committed; record it when it is the ``every``-th or the ``last``."""
         self.since += 1
-        if self.since >= self.every or last:
+        if self.since >= self.every:
             self._record(state, end=last)
             self.since = 0
+        elif last:  # the run's end, recorded beside the cadence, which a run after keeps
+            self._record(state, end=True)
 
     def stop(self, state) -> None:
         """The run stopped before its end (interrupted, or a step that could not go on): its

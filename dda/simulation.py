@@ -217,6 +217,8 @@ class Simulation:
         self._resume_end = None  # the end of an interrupted run (set by resume)
         self._resume_checkpoint = None
         self._written = (None, None)  # the writer of the last frame written, and its time
+        # committed steps since the last recorded one (record_every's cadence across a stop)
+        self._record_since = 0
 
     @property
     def state(self) -> StepState:
@@ -295,7 +297,8 @@ class Simulation:
                         initial_centroid=self.model.centroid_initial
                         + self.model.origin)
         bar = self._progress_bar(progress, t_end, result.stats)
-        recorder = Recorder(self.model, result, writer, self.record_every, self._written)
+        recorder = Recorder(self.model, result, writer, self.record_every, self._written,
+                            self._record_since)
         recorder.start(self.committed)
         watchers = [w for w in (bar, callback) if w is not None]
         # Ctrl-C and SIGTERM stop the run at the end of a step until the writer is closed (a
@@ -379,12 +382,13 @@ class Simulation:
         while self.committed.time < t_end - 1e-12 * max(1.0, t_end):
             if runs is not None and runs.advance(t_end, bar):
                 # (a batch never takes the run's last step, and its watcher is the bar)
+                self._record_since = recorder.since
                 interrupts.check()
                 continue
             report = self._advance(result, t_end, settings)
             last = self.committed.time >= t_end - 1e-12 * max(1.0, t_end)
             recorder.committed(self.committed, last)
-            self._written = recorder.written
+            self._written, self._record_since = recorder.written, recorder.since
             if checkpoint is not None and (self.control.steps % checkpoint[1] == 0 or last):
                 self.save_checkpoint(checkpoint[0], writer, t_end, checkpoint[1])
             for watch in watchers:

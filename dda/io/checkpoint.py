@@ -75,6 +75,7 @@ def checkpoint_payload(simulation, writer, end: float, path, every: int) -> byte
             "warned": sorted(simulation.advisor.warned),
             "writer": _writer_to_data(writer, Path(path)),
             "written": _written_to_data(simulation._written, writer),
+            "record_since": int(simulation._record_since),
             "end": float(end), "checkpoint": [str(path), int(every)],
         }
     except SceneDataError as exc:
@@ -244,8 +245,10 @@ def _open(path: Path):
                               f"{CHECKPOINT_VERSION})")
     keys = {"format", "version", "scene", "simulation", "state", "control", "warned",
             "writer", "written", "end", "checkpoint"}
-    if set(header) != keys:
-        missing, extra = sorted(keys - set(header)), sorted(set(header) - keys)
+    # (record_since: optional, a checkpoint written before it was kept reads as 0)
+    if not keys <= set(header) <= keys | {"record_since"}:
+        missing, extra = sorted(keys - set(header)), sorted(set(header) - keys
+                                                            - {"record_since"})
         raise CheckpointError(f"its header is incomplete or has more than a checkpoint's "
                               f"(missing {missing}, unknown {extra})")
     store = ArrayStore({k[2:]: v for k, v in arrays.items() if k.startswith("a/")})
@@ -292,6 +295,10 @@ def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict
     sim.advisor.warned = set(warned)
     writer = _writer(header["writer"], path, outside)
     sim._written = _written(header["written"], writer)
+    since = header.get("record_since", 0)  # (none in a checkpoint of an earlier version)
+    if isinstance(since, bool) or not isinstance(since, int) or not 0 <= since:
+        raise CheckpointError("record_since: not a count of steps")
+    sim._record_since = since % sim.record_every
     end = header["end"]
     ck = header["checkpoint"]
     if (isinstance(end, bool) or not isinstance(end, (int, float)) or not np.isfinite(end)

@@ -163,7 +163,13 @@ class VTUWriter:
         (``last_time`` tells a resumed run which frame the writer has).
         """
         n = self._n
-        if self.due(frame.time) or last:
+        # a run's stop writes its last frame, which skip() counted when it came: not a new
+        # frame (counted again, or taken as the next one due, every frame after a resume
+        # came one step late)
+        again = (last and frame.time == self.last_time
+                 and not (n and self._entries[n - 1][0] == frame.time))
+        due = not again and self.due(frame.time)
+        if due or last:
             if "_cleared" not in self.__dict__:
                 self._clear_stale(n)
             name = f"{self.prefix.name}_{n:05d}.vtu"
@@ -175,7 +181,9 @@ class VTUWriter:
             del self._entries[n:]  # an entry left by an interrupted write
             self._entries.append((frame.time, name))
             n += 1
-            self._n, self._seen, self.last_time = n, self._seen + 1, frame.time
+            self._n, self._seen, self.last_time = n, self._seen + (not again), frame.time
+            if due:  # (an interval runs from the frames it was due at, not a run's ends)
+                self.anchor_time = frame.time
             self._index_last()
             return
         self.skip(frame.time)
@@ -205,8 +213,11 @@ class VTUWriter:
         """With ``interval``: the time from which a frame is :meth:`due` (-inf before the
         first is written)."""
         n = self._n
+        anchor = self.__dict__.get("anchor_time")  # (none in an earlier version's checkpoint)
+        if anchor is None:
+            anchor = -np.inf if n == 0 else self._entries[n - 1][0]
         # (a relative slack: frame times are sums of steps, 0.05 may come as 0.0499999...)
-        return -np.inf if n == 0 else self._entries[n - 1][0] + self.interval * (1 - 1e-9)
+        return anchor + self.interval * (1 - 1e-9)
 
     def frames_to_due(self) -> int:
         """With ``every``: the frames given to :meth:`write` or :meth:`skip` before the next
