@@ -13,6 +13,8 @@ def finite_number(name: str, value, *, positive=False, nonnegative=False, where:
     if isinstance(value, (str, bytes)):
         raise ValueError(f"{label} must be a number, got the text {value!r} (give it without "
                          "quotes)")
+    if isinstance(value, (bool, np.bool_)):  # float(True) is 1.0: a flag where a number goes
+        raise ValueError(f"{label} must be a number, got {value!r}")
     try:
         x = float(value)
     except (TypeError, ValueError):

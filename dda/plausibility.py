@@ -101,6 +101,23 @@ def check_unit_weight(value: float) -> None:
               "(in kN/m^3, or a density in kg/m^3?)")
 
 
+#: the deepest water on Earth (m): a table higher than this above every block is a typing
+#: mistake (the wrong unit, a coordinate for a height)
+DEEPEST_WATER = 11_000.0
+
+
+def check_water_table(model) -> None:
+    """A water table more than :data:`DEEPEST_WATER` above the top of the scene."""
+    water = getattr(model, "water", None)
+    if water is None or not model.n_blocks:
+        return
+    above = float(water.y.min()) - float(model.x_initial[:, 1].max())
+    if above > DEEPEST_WATER:
+        _warn(f"Scene.set_water_table: the table lies {above:.3g} m above the scene's top, "
+              f"deeper than any water on Earth ({DEEPEST_WATER:g} m): a height in mm, or a "
+              "coordinate given for a height?", stacklevel=4)
+
+
 def check_direction(name: str, vector, where: str) -> None:
     """A direction that is not a unit vector (it scales the amplitude it carries)."""
     v = np.asarray(vector, dtype=float)

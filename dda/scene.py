@@ -524,12 +524,16 @@ class Scene:
 
         Parameters
         ----------
-        table : float or sequence of (x, y)
+        table : float or sequence of (x, y) or None
             A level (the table's height, m), or a polyline of strictly increasing x that
-            spans every block's x at the start (constant beyond its ends while blocks move).
+            spans every block's x at the start (constant beyond its ends while blocks move);
+            None removes the water table.
         unit_weight : float
             Of the water, N/m^3 (9810 for fresh water).
         """
+        if table is None:
+            self._water = None
+            return
         gamma = finite_number("unit_weight", unit_weight, positive=True,
                               where="Scene.set_water_table")
         check_unit_weight(gamma)

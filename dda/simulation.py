@@ -31,7 +31,12 @@ from dda.io.checkpoint import (
 from dda.kernels import cache as kernel_cache
 from dda.model import Model
 from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning, natural_step
-from dda.plausibility import PlausibilityWarning, check_rate_laws_static, check_time_step
+from dda.plausibility import (
+    PlausibilityWarning,
+    check_rate_laws_static,
+    check_time_step,
+    check_water_table,
+)
 from dda.profiling import StepProfile
 from dda.progress import ProgressBar
 from dda.recorder import Recorder, frame
@@ -211,6 +216,7 @@ class Simulation:
             check_time_step(self.model, self.dt)
         else:
             check_rate_laws_static(self.model.joints.laws, self.dt)
+        check_water_table(self.model)
         self.committed = StepState.initial(self.model)
         self.control = StepControl(self.dt, natural_dt=natural_step(self.model))
         self.advisor = PenaltyAdvisor(self.model, self.dt)

@@ -573,6 +573,7 @@ def two_blocks():
     ({"block_b": "top"}, r"bolt 0 .*: block_a and block_b are the same block"),
     ({"stiffness": -1e6}, r"bolt 0 .*: stiffness must be positive, got -1000000"),
     ({"stiffness": float("nan")}, r"bolt 0 .*: stiffness must be finite, got nan"),
+    ({"stiffness": True}, r"bolt 0 .*: stiffness must be a number, got True"),  # was 1 N/m
     ({"strength": -5.0}, r"bolt 0 .*: strength must be positive, got -5"),
     ({"pretension": -1.0}, r"bolt 0 .*: pretension must not be negative"),
     ({"pretension": 2e3, "strength": 1e3}, r"pretension 2000 N/m exceeds the strength 1000"),

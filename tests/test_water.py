@@ -317,3 +317,19 @@ def test_a_floating_block_bobs_without_gaining_energy(solver):
     assert max(totals) <= 1e-6 * e0
     assert max(highest) <= 0.4
     assert sim.energy().water > 0.0
+
+
+def test_a_table_deeper_than_any_sea_is_flagged_and_none_removes_the_table():
+    """A level of 1e6 m (a height in mm) ran without a word; set_water_table(None) raised
+    "table must be a number" where a user meant to drain the scene."""
+    scene = slope(1.0)
+    scene.set_water_table(1e6)
+    with pytest.warns(dda.PlausibilityWarning, match="deeper than any water on Earth"):
+        dda.Simulation(scene, dt=1e-3)
+    scene.set_water_table(200.0)  # a deep reservoir over the slope: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", dda.PlausibilityWarning)
+        dda.Simulation(scene, dt=1e-3)
+    scene.set_water_table(None)
+    assert scene.water is None
+    assert dda.Simulation(scene, dt=1e-3).model.water is None
