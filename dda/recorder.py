@@ -97,8 +97,9 @@ class Recorder:
         self.since = int(since) % every
 
     def start(self, state) -> None:
-        """Record the state a run starts from."""
-        self._record(state)
+        """Record the state a run starts from (beside the cadence when a run goes on from a
+        step between recorded ones)."""
+        self._record(state, extra=self.since != 0)
 
     def committed(self, state, last: bool) -> None:
         """A step was committed; record it when it is the ``every``-th or the ``last``."""
@@ -107,7 +108,7 @@ class Recorder:
             self._record(state, end=last)
             self.since = 0
         elif last:  # the run's end, recorded beside the cadence, which a run after keeps
-            self._record(state, end=True)
+            self._record(state, end=True, extra=True)
 
     def stop(self, state) -> None:
         """The run stopped before its end (interrupted, or a step that could not go on): its
@@ -115,12 +116,16 @@ class Recorder:
         a stopped run ended up to ``every`` - 1 frames short of where it stopped)."""
         times = self.result.time
         if not len(times) or times[-1] != state.time:
-            self._record(state, end=True)
+            self._record(state, end=True, extra=True)
         elif self.__dict__.get("_skipped") == state.time:  # recorded, but its frame skipped
             self.writer.write(frame(self.model, state), last=True)
             self.written = (self.writer, state.time)
 
-    def _record(self, state, end=False):
+    def _record(self, state, end=False, extra=False):
+        """Record ``state``: a row, and a frame for the writer. ``end``: a run's end (a
+        thinned series ends there); ``extra``: beside ``every``'s cadence (a run's end or
+        stop between recorded steps, or the start of a run that goes on from one), a frame
+        a writer with ``write_extra`` writes without counting it in its own thinning."""
         keys, f, n = pair_forces(self.model, state)
         # the result needs block centroids only; a full Frame is built when a writer asks
         self.result.record(state.time, state.centroid - self.model.centroid_initial,
@@ -139,7 +144,11 @@ class Recorder:
             last = end and (getattr(writer, "every", 1) > 1
                             or getattr(writer, "interval", None) is not None)
             due = getattr(writer, "due", None) if hasattr(writer, "skip") else None
-            if last:
+            if extra and hasattr(writer, "write_extra"):
+                writer.write_extra(frame(self.model, state))
+            elif last or extra:
+                if not extra and due is not None and not due(state.time):
+                    writer.skip(state.time)  # a frame of the cadence: counted as it comes
                 writer.write(frame(self.model, state), last=True)
             elif due is None or due(state.time):
                 writer.write(frame(self.model, state))

@@ -54,10 +54,9 @@ MASS = [(0.4 * x, 0.4 * y) for x, y in SLOPE.MASS]
 #: after heavy rain: dry at the toe, 1.6 m below the crest at the wall's face (x = 24 m) and
 #: 1 m below it at x = 28 m (m)
 WATER_TABLE = [(0.0, 0.0), (8.0, 0.0), (12.0, 4.5), (28.0, 7.0)]
-#: the bolts: spacing along the top surface and the face (m), length below the bedding plane
-#: they cross (m), axial stiffness (N/m per m of slope; a 25 mm bar, E 200 GPa, 3 m long at
-#: 1.5 m spacing in plane strain: E A / (L s) = 2.2e7) and tensile strength (N/m: 250 kN a
-#: bar at 1.5 m)
+#: the bolts: spacing along the top surface and the face (m), axial stiffness (N/m per m of
+#: slope; a 25 mm bar, E 200 GPa, 3 m long at 1.5 m spacing in plane strain: E A / (L s) =
+#: 2.2e7) and tensile strength (N/m: 250 kN a bar at 1.5 m)
 BOLT_SPACING, BOLT_STIFFNESS, BOLT_STRENGTH = 1.5, 2.2e7, 1.7e5
 
 

@@ -195,3 +195,36 @@ def test_the_command_stops_on_a_signal_with_one_line_and_how_to_go_on(tmp_path):
     assert lines[0].endswith(f"resume with: dda run {ckpt}")
     stopped = dda.Simulation.resume(ckpt).state.time
     assert f"t = {stopped:g} s" in lines[0]
+
+
+def test_a_layout_5_checkpoint_resumes_and_a_newer_one_is_named_as_newer(tmp_path):
+    """Layout 6 keeps record_every's count; a layout 5 checkpoint (written before) resumes
+    with it at 0, and a checkpoint from a later dda is refused by its layout, not as a
+    header with an unknown key."""
+    import json
+
+    import numpy as np
+
+    from dda.io import checkpoint as ck
+
+    sim = cs.simulation()
+    sim.run(0.01, checkpoint=tmp_path / "a.ckpt")
+
+    def rewrite(src, dst, change):
+        with np.load(src, allow_pickle=False) as f:
+            arrays = {k: f[k] for k in f.files}
+        header = json.loads(arrays.pop("header").tobytes().decode())
+        change(header)
+        raw = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
+        np.savez(dst, header=raw, **arrays)
+
+    def as_five(h):
+        h["version"] = 5
+        del h["record_since"]
+
+    rewrite(tmp_path / "a.ckpt", tmp_path / "five.npz", as_five)
+    assert dda.Simulation.resume(tmp_path / "five.npz")._record_since == 0
+    rewrite(tmp_path / "a.ckpt", tmp_path / "seven.npz",
+            lambda h: h.update(version=ck.CHECKPOINT_VERSION + 1, later_key=1))
+    with pytest.raises(ValueError, match=r"layout 7, this version reads 5 and 6"):
+        dda.Simulation.resume(tmp_path / "seven.npz")

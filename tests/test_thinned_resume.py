@@ -34,31 +34,63 @@ def _times(prefix) -> np.ndarray:
     return np.round([float(t) for t in re.findall(r'timestep="([^"]+)"', text)], 9)
 
 
-def _interrupted(tmp_path, stop_at, error=KeyboardInterrupt, **kw):
+def _interrupted(tmp_path, stop_at, error=KeyboardInterrupt, sim=None, **kw):
     """A run stopped by ``error`` after step ``stop_at``, then resumed from its checkpoint
     to the end; the writer's folder."""
-    sim = dda.Simulation(_scene(), dt=DT, solver="legacy", **kw.pop("sim", {}))
+    run = dda.Simulation(_scene(), dt=DT, solver="legacy", **(sim or {}))
 
     def stop(state, report):
-        if sim.control.steps == stop_at:
+        if run.control.steps == stop_at:
             raise error
 
     with pytest.raises(error):
-        sim.run(END, progress=False, output=VTUWriter(str(tmp_path / "I" / "v"), **kw),
+        run.run(END, progress=False, output=VTUWriter(str(tmp_path / "I" / "v"), **kw),
                 checkpoint=str(tmp_path / "I" / "run.ckpt"), checkpoint_every=50,
                 callback=stop)
     return dda.Simulation.resume(str(tmp_path / "I" / "run.ckpt")).run(progress=False)
 
 
-@pytest.mark.parametrize("thinning", [{"every": 3}, {"interval": 0.003}],
-                         ids=["every", "interval"])
-def test_frames_after_a_ctrl_c_and_a_resume_are_the_uninterrupted_runs(tmp_path, thinning):
-    dda.Simulation(_scene(), dt=DT, solver="legacy").run(
+THINNINGS = [(1, {"every": 3}), (1, {"interval": 0.003}), (3, {"every": 2}),
+             (3, {"interval": 0.004})]
+IDS = ["every", "interval", "record_every-and-every", "record_every-and-interval"]
+
+
+def _whole(tmp_path, record_every, thinning) -> np.ndarray:
+    dda.Simulation(_scene(), dt=DT, solver="legacy", record_every=record_every).run(
         END, progress=False, output=VTUWriter(str(tmp_path / "F" / "v"), **thinning))
-    _interrupted(tmp_path, 101, **thinning)
-    whole, resumed = _times(tmp_path / "F" / "v"), _times(tmp_path / "I" / "v")
-    assert np.array_equal(np.setdiff1d(resumed, whole), [0.101])  # the stop's own frame
-    assert np.array_equal(np.setdiff1d(whole, resumed), [])
+    return _times(tmp_path / "F" / "v")
+
+
+@pytest.mark.parametrize(("record_every", "thinning"), THINNINGS, ids=IDS)
+@pytest.mark.parametrize(("stop_at", "error", "extra"),
+                         [(101, KeyboardInterrupt, [0.1, 0.101]), (120, RuntimeError, [0.1])],
+                         ids=["ctrl-c", "crash"])
+def test_frames_after_a_stop_and_a_resume_are_the_uninterrupted_runs(
+        tmp_path, record_every, thinning, stop_at, error, extra):
+    """Resumed from the Ctrl-C's checkpoint, or from the last periodic one (step 100) after a
+    run that died at step 120: the frames from step 100 on are the uninterrupted run's, the
+    stop's and the resumed start's own beside them (with record_every 3, the run died at
+    step 120 and record_every and every = 2 or interval = 4 ms, they came at 0.105, 0.111,
+    ... for 0.102, 0.108, ...)."""
+    whole = _whole(tmp_path, record_every, thinning)
+    _interrupted(tmp_path, stop_at, error, sim={"record_every": record_every}, **thinning)
+    resumed = _times(tmp_path / "I" / "v")
+    late = resumed[resumed >= 0.1 - 1e-9]
+    beside = np.setdiff1d(late, whole)
+    assert set(beside) <= set(extra)
+    assert np.array_equal(np.setdiff1d(whole[whole >= 0.1 - 1e-9], late), [])
+
+
+@pytest.mark.parametrize(("record_every", "thinning"), THINNINGS, ids=IDS)
+def test_a_run_that_goes_on_keeps_the_writers_cadence(tmp_path, record_every, thinning):
+    whole = _whole(tmp_path, record_every, thinning)
+    sim = dda.Simulation(_scene(), dt=DT, solver="legacy", record_every=record_every)
+    writer = VTUWriter(str(tmp_path / "S" / "v"), **thinning)
+    sim.run(0.1, progress=False, output=writer)
+    sim.run(0.1, progress=False, output=writer)
+    split = _times(tmp_path / "S" / "v")
+    assert set(np.setdiff1d(split, whole)) <= {0.1}  # the first run's end
+    assert np.array_equal(np.setdiff1d(whole, split), [])
 
 
 def test_rows_resumed_from_a_periodic_checkpoint_keep_record_every(tmp_path):

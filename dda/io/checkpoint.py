@@ -43,8 +43,10 @@ from dda.io.scene_data import (
 __all__ = ["CHECKPOINT_VERSION", "checkpoint_payload", "write_checkpoint", "read_checkpoint"]
 
 # layout of the checkpoint files (2: Simulation.damping; 3: the penetration guard;
-# 4: Model, StepState and StepControl; 5: data, not a pickle)
-CHECKPOINT_VERSION = 5
+# 4: Model, StepState and StepControl; 5: data, not a pickle; 6: record_every's count)
+CHECKPOINT_VERSION = 6
+#: the layouts this version reads (5 resumes with record_every's count from 0)
+READABLE_VERSIONS = (5, 6)
 FORMAT = "dda checkpoint"
 
 _STATE_ARRAYS = ("x", "velocity", "stress", "rotation", "centroid", "load_points",
@@ -223,7 +225,7 @@ def _open(path: Path):
     if not zipfile.is_zipfile(path):
         raise CheckpointError(
             "not a checkpoint of this version of dda: not an .npz file (a checkpoint written "
-            f"by dda before layout {CHECKPOINT_VERSION} was a pickle, which is never loaded: "
+            f"by dda before layout {READABLE_VERSIONS[0]} was a pickle, which is never loaded: "
             "it could run any code; start the run again)")
     try:
         with np.load(path, allow_pickle=False) as f:
@@ -239,16 +241,17 @@ def _open(path: Path):
         raise CheckpointError(f"not a checkpoint: its header is not JSON ({exc})") from None
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise CheckpointError("not a checkpoint: its header is not a dda checkpoint's")
-    if header.get("version") != CHECKPOINT_VERSION:
+    version = header.get("version")
+    if isinstance(version, bool) or version not in READABLE_VERSIONS:
         raise CheckpointError(f"not a checkpoint of this version of dda (layout "
-                              f"{header.get('version')!r}, this version reads "
-                              f"{CHECKPOINT_VERSION})")
+                              f"{version!r}, this version reads "
+                              f"{' and '.join(map(str, READABLE_VERSIONS))})")
     keys = {"format", "version", "scene", "simulation", "state", "control", "warned",
             "writer", "written", "end", "checkpoint"}
-    # (record_since: optional, a checkpoint written before it was kept reads as 0)
-    if not keys <= set(header) <= keys | {"record_since"}:
-        missing, extra = sorted(keys - set(header)), sorted(set(header) - keys
-                                                            - {"record_since"})
+    if version >= 6:
+        keys.add("record_since")
+    if set(header) != keys:
+        missing, extra = sorted(keys - set(header)), sorted(set(header) - keys)
         raise CheckpointError(f"its header is incomplete or has more than a checkpoint's "
                               f"(missing {missing}, unknown {extra})")
     store = ArrayStore({k[2:]: v for k, v in arrays.items() if k.startswith("a/")})
@@ -295,7 +298,7 @@ def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict
     sim.advisor.warned = set(warned)
     writer = _writer(header["writer"], path, outside)
     sim._written = _written(header["written"], writer)
-    since = header.get("record_since", 0)  # (none in a checkpoint of an earlier version)
+    since = header.get("record_since", 0)  # (none in a layout 5 checkpoint)
     if isinstance(since, bool) or not isinstance(since, int) or not 0 <= since:
         raise CheckpointError("record_since: not a count of steps")
     sim._record_since = since % sim.record_every

@@ -170,23 +170,34 @@ class VTUWriter:
                  and not (n and self._entries[n - 1][0] == frame.time))
         due = not again and self.due(frame.time)
         if due or last:
-            if "_cleared" not in self.__dict__:
-                self._clear_stale(n)
-            name = f"{self.prefix.name}_{n:05d}.vtu"
-            path = self.prefix.parent / name
-            # (not ending in .vtu: a file cut short by a kill must not join a *.vtu series)
-            tmp = path.with_name(path.name + ".part")
-            write_vtu(tmp, frame, plain_names=self.plain_names)
-            os.replace(tmp, path)
-            del self._entries[n:]  # an entry left by an interrupted write
-            self._entries.append((frame.time, name))
-            n += 1
-            self._n, self._seen, self.last_time = n, self._seen + (not again), frame.time
-            if due:  # (an interval runs from the frames it was due at, not a run's ends)
-                self.anchor_time = frame.time
-            self._index_last()
+            # (an interval runs from the frames it was due at, not from a run's ends)
+            self._write_file(frame, self._seen + (not again),
+                             frame.time if due else self.__dict__.get("anchor_time"))
             return
         self.skip(frame.time)
+
+    def write_extra(self, frame: Frame) -> None:
+        """Write a frame beside the series' thinning (a run's end or stop between recorded
+        steps, the start of a run that goes on from one): the frames after it are those of
+        a run never stopped."""
+        self._write_file(frame, self._seen, self.__dict__.get("anchor_time"))
+
+    def _write_file(self, frame: Frame, seen: int, anchor: float | None) -> None:
+        """The frame's file and its entry; then the counts, ``last_time`` and the interval's
+        anchor in one statement (:meth:`write`'s docstring)."""
+        n = self._n
+        if "_cleared" not in self.__dict__:
+            self._clear_stale(n)
+        name = f"{self.prefix.name}_{n:05d}.vtu"
+        path = self.prefix.parent / name
+        # (not ending in .vtu: a file cut short by a kill must not join a *.vtu series)
+        tmp = path.with_name(path.name + ".part")
+        write_vtu(tmp, frame, plain_names=self.plain_names)
+        os.replace(tmp, path)
+        del self._entries[n:]  # an entry left by an interrupted write
+        self._entries.append((frame.time, name))
+        self._n, self._seen, self.last_time, self.anchor_time = n + 1, seen, frame.time, anchor
+        self._index_last()
 
     def _clear_stale(self, n: int) -> None:
         """Remove this prefix's series files numbered ``n`` and up, and half-written ones:
