@@ -20,7 +20,7 @@ from dda.contact.detection import Memo, VertexTopology
 from dda.contact.friction import FrictionLaw
 from dda.kernels.joints import deepest_spring, joint_rows
 from dda.scene import Scene
-from dda.water import water_forces, water_stiffness
+from dda.water import water_loads
 
 __all__ = ["JointTable", "Model"]
 
@@ -344,13 +344,12 @@ class Model:
         f[:, 3:] -= ints.area[:, None] * stress
         centroid = ints.centroid
         if self.__dict__.get("water") is not None:
-            xw = self.x_initial if x is None else x
-            f += water_forces(self.water, xw, self.topo.nxt, self.topo.block, centroid,
-                              self.water_edges)
-            # the pressure's stiffness: the load f_w - K_w d, the step's end to first order
-            # (the start's alone fed a bobbing block's motion; dda.water.water_stiffness)
-            k = k + water_stiffness(self.water, xw, self.topo.nxt, self.topo.block,
-                                    centroid, self.water_edges)
+            # the pressure and its stiffness: the load f_w - K_w d, the step's end to first
+            # order (the start's alone fed a bobbing block's motion; dda.water)
+            fw, kw = water_loads(self.water, self.x_initial if x is None else x,
+                                 self.topo.nxt, self.topo.block, centroid, self.water_edges)
+            f += fw
+            k = k + kw
         if len(self.load_block):
             forces = self.load_constant.copy()
             for i, history in self.load_varying:  # one user callable per time-varying load

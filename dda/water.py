@@ -37,7 +37,8 @@ import numpy as np
 
 from dda import geometry
 
-__all__ = ["WaterTable", "water_forces", "water_stiffness", "water_energy", "UNIT_WEIGHT"]
+__all__ = ["WaterTable", "water_forces", "water_stiffness", "water_loads", "water_energy",
+           "UNIT_WEIGHT"]
 
 #: unit weight of fresh water (N/m^3)
 UNIT_WEIGHT = 9810.0
@@ -204,14 +205,23 @@ def water_stiffness(table: WaterTable, x: np.ndarray, nxt: np.ndarray,
     fed it: a floating cube bobbing with 142 steps a period gained 16% of amplitude in 7
     periods.
     """
+    return water_loads(table, x, nxt, vertex_block, centroid, edges)[1]
+
+
+def water_loads(table: WaterTable, x: np.ndarray, nxt: np.ndarray, vertex_block: np.ndarray,
+                centroid: np.ndarray, edges: np.ndarray | None = None):
+    r"""The water pressure's forces and stiffness on the blocks' unknowns, (n_blocks, 6) and
+    (n_blocks, 6, 6), on the same pieces of the edges (:func:`water_stiffness`): each edge's
+    end forces :math:`\mathbf g_p, \mathbf g_q` taken to the unknowns by :math:`J^T` (``T``
+    is affine, so this is :func:`water_forces`' integral of :math:`T^T \mathbf t`)."""
     nb = len(centroid)
-    k = np.zeros((nb, 6, 6))
+    f, k = np.zeros((nb, 6)), np.zeros((nb, 6, 6))
     v = np.arange(len(x)) if edges is None else edges
     p, q = x[v], x[nxt[v]]
     wet = np.minimum(p[:, 1], q[:, 1]) < table.y.max()
     v, p, q = v[wet], p[wet], q[wet]
     if not len(v):
-        return k
+        return f, k
     s = _splits(table, p, q)
     a, b = s[:, :-1], s[:, 1:]
     sg = (a[..., None] + (b - a)[..., None] * _GAUSS).reshape(len(v), -1)   # (e, g)
@@ -244,5 +254,8 @@ def water_stiffness(table: WaterTable, x: np.ndarray, nxt: np.ndarray,
     ke = gamma * (first + second).reshape(len(v), 4, 4)    # -dg: the edge's stiffness
     t = geometry.t_matrix(np.concatenate([p, q]), np.tile(centroid[vertex_block[v]], (2, 1)))
     jac = np.concatenate([t[: len(v)], t[len(v):]], axis=1)                 # (e, 4, 6)
-    np.add.at(k, vertex_block[v], np.einsum("eai,eab,ebj->eij", jac, ke, jac))
-    return 0.5 * (k + k.transpose(0, 2, 1))
+    ends = -gamma * (load[:, :, None] * nl[:, None, :]).reshape(len(v), 4)  # g_p, g_q
+    blk = vertex_block[v]
+    np.add.at(f, blk, np.einsum("eai,ea->ei", jac, ends))
+    np.add.at(k, blk, np.einsum("eai,eab,ebj->eij", jac, ke, jac))
+    return f, 0.5 * (k + k.transpose(0, 2, 1))

@@ -333,3 +333,18 @@ def test_a_table_deeper_than_any_sea_is_flagged_and_none_removes_the_table():
     scene.set_water_table(None)
     assert scene.water is None
     assert dda.Simulation(scene, dt=1e-3).model.water is None
+
+
+def test_the_steps_water_loads_are_the_forces_and_the_stiffness():
+    """A step takes both from one pass over the edges' pieces (dda.water.water_loads): the
+    forces from each edge's end forces through J = [T(p); T(q)], as T is affine."""
+    from dda.water import water_loads, water_stiffness
+
+    table = WaterTable(np.array([0.0, 0.8, 1.4]), np.array([0.9, 1.5, 1.1]))  # kinked, ends
+    x = np.vstack([_QUAD, [[2.0, 0.0], [3.0, 0.2], [2.5, 3.0]]])
+    nxt, blocks = np.array([1, 2, 3, 0, 5, 6, 4]), np.array([0, 0, 0, 0, 1, 1, 1])
+    centroid = np.array([x[:4].mean(0), x[4:].mean(0)])
+    f, k = water_loads(table, x, nxt, blocks, centroid)
+    np.testing.assert_allclose(f, water_forces(table, x, nxt, blocks, centroid),
+                               rtol=0, atol=1e-12 * np.abs(f).max())
+    np.testing.assert_array_equal(k, water_stiffness(table, x, nxt, blocks, centroid))
