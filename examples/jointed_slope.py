@@ -66,6 +66,9 @@ way. Under ``--auto`` through 10 s (legacy at 2.4e-4 s, Newton at 4.3e-4 s) the 
 of CPU a run on a machine about a quarter slower than the figures above
 (``results/cut_rate_auto_10s.md``); the face moved 401-599 mm (median), and which wedge slides
 out over 10 s is chaotic at that scale: the methods part on cuts 2 and 4, by 198 and 73 mm.
+(Seeds 1-4 had lost joints to a block-cutting defect since fixed; cut again, through 10 s:
+24 of 172,150 steps cut under legacy DDA and none of 94,211 under Newton, 6.5-8.7 minutes of
+CPU a run, the face 425-510 mm and 426-703 mm; ``results/cut_rate_auto_10s_seeds1-4_recut.md``.)
 
 ``--dt auto`` keeps the joints' 5e10 N/m and lets the simulation choose dt for it
 (``dda.auto_settings``, rule 6: the penalty at 3 times the lightest block's inertia under
