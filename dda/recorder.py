@@ -140,16 +140,18 @@ class Recorder:
             written = self.written[1]
         if written != state.time:
             # a series thinned by its writer (VTUWriter's every, interval) ends at the
-            # run's end
-            last = end and (getattr(writer, "every", 1) > 1
-                            or getattr(writer, "interval", None) is not None)
+            # run's end (a writer that does not thin takes write(frame) alone)
+            thinned = (getattr(writer, "every", 1) > 1
+                       or getattr(writer, "interval", None) is not None)
             due = getattr(writer, "due", None) if hasattr(writer, "skip") else None
             if extra and hasattr(writer, "write_extra"):
                 writer.write_extra(frame(self.model, state))
-            elif last or extra:
+            elif (end or extra) and thinned:
                 if not extra and due is not None and not due(state.time):
                     writer.skip(state.time)  # a frame of the cadence: counted as it comes
                 writer.write(frame(self.model, state), last=True)
+            elif extra:
+                writer.write(frame(self.model, state))
             elif due is None or due(state.time):
                 writer.write(frame(self.model, state))
             else:  # (a frame the writer would not write: not built)

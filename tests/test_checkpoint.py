@@ -224,6 +224,17 @@ def test_a_layout_5_checkpoint_resumes_and_a_newer_one_is_named_as_newer(tmp_pat
 
     rewrite(tmp_path / "a.ckpt", tmp_path / "five.npz", as_five)
     assert dda.Simulation.resume(tmp_path / "five.npz")._record_since == 0
+    # layout 5 as the first commits with record_every's count wrote it: read, count and all
+    rewrite(tmp_path / "a.ckpt", tmp_path / "five_b.npz", lambda h: h.update(version=5))
+    dda.Simulation.resume(tmp_path / "five_b.npz")
+    for bad in (1, 10**30, -1, 1.0, True):  # record_every is 1 here: only 0
+        rewrite(tmp_path / "a.ckpt", tmp_path / "bad.npz",
+                lambda h, bad=bad: h.update(record_since=bad))
+        with pytest.raises(ValueError, match="record_since"):
+            dda.Simulation.resume(tmp_path / "bad.npz")
+    rewrite(tmp_path / "a.ckpt", tmp_path / "float.npz", lambda h: h.update(version=6.0))
+    with pytest.raises(ValueError, match="layout 6.0"):
+        dda.Simulation.resume(tmp_path / "float.npz")
     rewrite(tmp_path / "a.ckpt", tmp_path / "seven.npz",
             lambda h: h.update(version=ck.CHECKPOINT_VERSION + 1, later_key=1))
     with pytest.raises(ValueError, match=r"layout 7, this version reads 5 and 6"):

@@ -113,3 +113,24 @@ def test_a_run_that_goes_on_keeps_record_every(tmp_path):
     assert first.time[-1] == second.time[0] == pytest.approx(0.1)  # each run's ends
     np.testing.assert_array_equal(np.round(second.time[1:], 9),
                                   np.round(whole.time[whole.time > 0.1 + DT / 2], 9))
+
+
+def test_a_writer_of_write_and_close_alone_gets_every_recorded_frame():
+    """The writer protocol's least: write(frame) and close(). A run's end beside
+    record_every's cadence was handed to it as write(frame, last=True): a TypeError, the
+    run's result lost."""
+    class Frames:
+        def __init__(self):
+            self.times = []
+
+        def write(self, frame):
+            self.times.append(round(frame.time, 9))
+
+        def close(self):
+            pass
+
+    writer = Frames()
+    sim = dda.Simulation(_scene(), dt=DT, solver="legacy", record_every=3)
+    result = sim.run(0.010, progress=False, output=writer)
+    assert writer.times == [0.0, 0.003, 0.006, 0.009, 0.01]
+    np.testing.assert_allclose(result.time, writer.times)

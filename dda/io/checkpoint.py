@@ -242,7 +242,7 @@ def _open(path: Path):
     if not isinstance(header, dict) or header.get("format") != FORMAT:
         raise CheckpointError("not a checkpoint: its header is not a dda checkpoint's")
     version = header.get("version")
-    if isinstance(version, bool) or version not in READABLE_VERSIONS:
+    if type(version) is not int or version not in READABLE_VERSIONS:
         raise CheckpointError(f"not a checkpoint of this version of dda (layout "
                               f"{version!r}, this version reads "
                               f"{' and '.join(map(str, READABLE_VERSIONS))})")
@@ -250,7 +250,8 @@ def _open(path: Path):
             "writer", "written", "end", "checkpoint"}
     if version >= 6:
         keys.add("record_since")
-    if set(header) != keys:
+    # (layout 5 as written by the commits that began record_since may carry it)
+    if set(header) != keys and not (version == 5 and set(header) == keys | {"record_since"}):
         missing, extra = sorted(keys - set(header)), sorted(set(header) - keys)
         raise CheckpointError(f"its header is incomplete or has more than a checkpoint's "
                               f"(missing {missing}, unknown {extra})")
@@ -299,9 +300,10 @@ def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict
     writer = _writer(header["writer"], path, outside)
     sim._written = _written(header["written"], writer)
     since = header.get("record_since", 0)  # (none in a layout 5 checkpoint)
-    if isinstance(since, bool) or not isinstance(since, int) or not 0 <= since:
-        raise CheckpointError("record_since: not a count of steps")
-    sim._record_since = since % sim.record_every
+    if isinstance(since, bool) or not isinstance(since, int) or not 0 <= since < sim.record_every:
+        raise CheckpointError(f"record_since: not a count of steps below record_every "
+                              f"({sim.record_every})")
+    sim._record_since = since
     end = header["end"]
     ck = header["checkpoint"]
     if (isinstance(end, bool) or not isinstance(end, (int, float)) or not np.isfinite(end)

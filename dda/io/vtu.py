@@ -180,7 +180,10 @@ class VTUWriter:
         """Write a frame beside the series' thinning (a run's end or stop between recorded
         steps, the start of a run that goes on from one): the frames after it are those of
         a run never stopped."""
-        self._write_file(frame, self._seen, self.__dict__.get("anchor_time"))
+        anchor = self.__dict__.get("anchor_time")
+        if anchor is None and self._n:  # (a writer from an earlier version's checkpoint)
+            anchor = self._entries[self._n - 1][0]
+        self._write_file(frame, self._seen, anchor)
 
     def _write_file(self, frame: Frame, seen: int, anchor: float | None) -> None:
         """The frame's file and its entry; then the counts, ``last_time`` and the interval's
