@@ -208,7 +208,9 @@ def describe(loaded, budget: float = 2.0) -> str:
                  f"steps {warm + 1} to {warm + done}; cuts add more")
         writes = (f" and {1e3 * per_frame:.3g} ms for each of {frames} VTU frames" if frames
                   else "; no VTU frames")
-        lines.append(f"cost       {loaded.duration:g} s = {steps} steps; about {total:.3g} s: "
+        # (at least: a cut step, or one shortened at a located slip reversal, adds steps)
+        lines.append(f"cost       {loaded.duration:g} s = {steps} steps of {sim.dt:.3g} s or more; "
+                     f"about {total:.3g} s: "
                      f"{startup:.2g} s to start, {1e3 * per_step:.3g} ms per step (timed on "
                      f"{timed}){writes}")
     return "\n".join(lines)
