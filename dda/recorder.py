@@ -81,7 +81,9 @@ class Recorder:
     result : dda.result.Result that receives the rows
     writer : optional writer (``write(frame)``, ``close()``, optionally ``last_time``, and
         ``due(time)`` with ``skip(time)``: a frame the writer says is not due is not built,
-        only counted, as :class:`dda.io.VTUWriter` thins a series)
+        only counted, as :class:`dda.io.VTUWriter` thins a series; and ``write_extra(frame)``
+        for a frame beside ``every``'s cadence, which a writer that thins must not count;
+        a writer that thins without it gets ``write(frame, last=True)``)
     every : record every this many steps
     written : ``(writer, time)`` of the last frame written by an earlier run of the same
         simulation: a run that goes on starts at that frame and must not write it twice

@@ -304,7 +304,7 @@ class Simulation:
                         + self.model.origin)
         bar = self._progress_bar(progress, t_end, result.stats)
         recorder = Recorder(self.model, result, writer, self.record_every, self._written,
-                            self._record_since)
+                            self.__dict__.get("_record_since", 0))
         recorder.start(self.committed)
         watchers = [w for w in (bar, callback) if w is not None]
         # Ctrl-C and SIGTERM stop the run at the end of a step until the writer is closed (a
