@@ -12,11 +12,10 @@ The energy of the blocks (METHOD.md section 1) and of the contact springs (secti
 
 Friction and Newmark's gamma = 1 only take energy out, so a run without loads, shaking or
 prescribed motion must never end with more than it started with (``tests/stability``); the
-water's pressure, a fixed field, is no exception: its work is the fall of its potential. One
-is: a block's weight and mass follow its current area, so a block whose area changes gains
-or loses weight. Compressed by deep water it gains energy: a 1 m cube (E 1 GPa, density
-1,500) sinking 650 m in 20 s gained 32.5 kJ/m, its strain energy, whatever dt, and 1/E of
-it (329 J/m at E 1e11).
+water's pressure, a fixed field, is no exception: its work is the fall of its potential. The
+exception is a block whose area changes: its weight and mass follow its current area.
+Compressed by deep water it gains energy: a 1 m cube (E 1 GPa, density 1,500) sinking 650 m
+in 20 s gained 32.5 kJ/m, its strain energy, whatever dt, and 1/E of it (329 J/m at E 1e11).
 """
 
 from __future__ import annotations

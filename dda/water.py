@@ -97,8 +97,7 @@ def _splits(table: WaterTable, p: np.ndarray, q: np.ndarray) -> np.ndarray:
 
 
 def water_forces(table: WaterTable, x: np.ndarray, nxt: np.ndarray, vertex_block: np.ndarray,
-                 centroid: np.ndarray, edges: np.ndarray | None = None,
-                 material: np.ndarray | None = None) -> np.ndarray:
+                 centroid: np.ndarray, edges: np.ndarray | None = None) -> np.ndarray:
     """The water pressure's forces on the blocks' unknowns, (n_blocks, 6).
 
     Parameters
@@ -110,10 +109,6 @@ def water_forces(table: WaterTable, x: np.ndarray, nxt: np.ndarray, vertex_block
     centroid : (n_blocks, 2) block centroids (T's origin)
     edges : (k,) int, optional
         The edges (by first vertex) to load; default all (a step passes the free blocks').
-    material : (n_vertices, 2), optional
-        Where the vertices were when ``T`` was taken (default ``x``): ``x`` moved from
-        ``material`` by ``T d``, the forces on ``d`` take ``T`` at each point's material
-        place (:func:`water_stiffness`).
     """
     f = np.zeros((len(centroid), 6))
     v = np.arange(len(x)) if edges is None else edges
@@ -135,10 +130,6 @@ def water_forces(table: WaterTable, x: np.ndarray, nxt: np.ndarray, vertex_block
     normal = np.column_stack([d[:, 1], -d[:, 0]]) / length[:, None]  # outward (CCW blocks)
     blk = vertex_block[v]
     n_g = sg.shape[1] * 2
-    if material is not None:  # T at the points' material places (T d is affine in them)
-        p0 = material[v]
-        points = p0[:, None, None, :] + sg[..., None] * (material[nxt[v]] - p0)[:, None,
-                                                                               None, :]
     t = geometry.t_matrix(points.reshape(-1, 2), np.repeat(centroid[blk], n_g, axis=0))
     traction = -(pressure * weight).reshape(-1, 1) * np.repeat(normal, n_g, axis=0)
     np.add.at(f, np.repeat(blk, n_g), np.einsum("gij,gi->gj", t, traction))
