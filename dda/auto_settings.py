@@ -166,6 +166,19 @@ says what it chose and why. The rule, and the measurements it comes from
    millisecond, and its run stopped on an untracked penetration (a hunt of the session of
    2026-12-06: 7 of its 10 legacy runs of such scenes; 0 of 8 under Newton).
 
+8. **A bolt's vibration is resolved** (dynamic analysis): a bolt is a physical spring (its
+   rock's steel, ``E A / L`` per metre of the section), not a contact's penalty, and how far
+   it swings decides whether it breaks. ``dt`` is at most its shortest period
+   (:func:`dda.bolts.shortest_period`: ``2 pi sqrt(m / k)`` with the block's rigid mass seen
+   at the bolt's point) over ``BOLT_STEPS_PER_PERIOD`` (250). Newmark's gamma = 1 damps a
+   vibration by ``exp(-pi omega dt / 4)`` in half a period, so a bolted block let go from
+   rest pulls its bolt to about ``1 - pi^2 / (4 N)`` of the undamped ``2 W`` at ``N`` steps a
+   period: 0.892 / 0.971 / 0.990 at 20 / 82 / 250 steps (the recursion of the one-mass
+   system; ``tests/test_bolts.py`` runs it). Without the rule a 2 m wedge hung from a bolt of
+   2.2e7 N/m (period 82 ms) got the fall's 0.032 s, 2.6 steps a period, and its bolt peaked at
+   1.31 W: a bolt of strength 1.5 W survived that breaks at 1.94 W with dt 1e-3 s (an
+   underground review of the session of 2026-12-07).
+
 A joint with a number keeps it; only "auto" values are chosen, all with the same rule (the
 lightest free block and the most loaded contact of the scene).
 
@@ -188,11 +201,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from dda._checks import finite_number
+from dda.bolts import shortest_period
 from dda.contact.friction import FrictionLaw
 from dda.penalty_advice import TARGET_DEPTH
 
-__all__ = ["AutoChoice", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS", "choose",
-           "largest_onset_drop", "penalty_floor", "shaking_frequency", "steps_for_drop"]
+__all__ = ["AutoChoice", "BOLT_STEPS_PER_PERIOD", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS",
+           "choose", "largest_onset_drop", "penalty_floor", "shaking_frequency",
+           "steps_for_drop"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block, for
 #: a solver without its own ``auto_kappa`` (legacy DDA's; the fully implicit method takes 10)
@@ -204,6 +219,8 @@ MASS_STIFFNESS = 2.0
 PROBE_SECONDS = 20.0
 #: the share of the shaking's spectral energy below the frequency dt resolves
 ENERGY_SHARE = 0.99
+#: steps a period of the fastest bolt's vibration (rule 8): its peak force 1% low
+BOLT_STEPS_PER_PERIOD = 250
 
 
 @dataclass(frozen=True)
@@ -412,7 +429,8 @@ def _steps_per_period(model, solver, steps: int) -> tuple[int, str]:
 
 
 def choose(model, solver, dt: float | None, shakes=(), duration: float | None = None,
-           auto_penalty: bool = True, speeds: np.ndarray | None = None) -> AutoChoice:
+           auto_penalty: bool = True, speeds: np.ndarray | None = None,
+           dynamic: bool = True) -> AutoChoice:
     """Choose dt (when ``dt`` is None) and the penalty (module docstring) for ``model``.
 
     Parameters
@@ -426,6 +444,8 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     auto_penalty : whether any joint's penalty is "auto" (else only dt is chosen)
     speeds : (n_blocks,) each block's speed at the start, its spin's at its farthest vertex
         included (m/s; rule 7; None or zeros: every block starts at rest)
+    dynamic : whether the analysis is dynamic (rule 8, the bolts' vibration; a static step
+        starts at rest and has none)
     """
     lines = []
     free = model.free
@@ -460,6 +480,13 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
                          f"under {'gravity and the shaking' if a_max else 'gravity'}: "
                          f"{dt_move:.3g} s")
         dt = float(min(dt_shake, dt_move))
+        if dynamic and model.bolts is not None:  # rule 8
+            period, bolt = shortest_period(model)
+            if period / BOLT_STEPS_PER_PERIOD < dt:
+                dt = period / BOLT_STEPS_PER_PERIOD
+                lines.append(f"dt: {BOLT_STEPS_PER_PERIOD} steps a period of the fastest "
+                             f"bolt's vibration ({bolt}, {period:.3g} s: a bolt let go "
+                             f"from rest then peaks within 1% of its force): {dt:.3g} s")
         if not np.isfinite(dt):
             raise ValueError("auto settings: nothing in the scene sets a time scale (no "
                              "gravity, no shaking); give dt")

@@ -206,7 +206,7 @@ class Simulation:
                             shakes=[s.history for s in scene.shakes],
                             auto_penalty=self.model.joints.auto,
                             speeds=(self.model.initial_speeds() if analysis == "dynamic"
-                                    else None))
+                                    else None), dynamic=analysis == "dynamic")
             self.dt = choice.dt
             if self.model.joints.auto:
                 self.model.joints = self.model.joints.with_penalties(choice.normal_penalty,

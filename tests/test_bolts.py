@@ -3,6 +3,8 @@ scene file, checkpoints and bad input."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -702,3 +704,103 @@ def test_the_dataset_carries_the_bolts(tmp_path):
     back = xr.open_dataset(tmp_path / "run.nc")
     np.testing.assert_array_equal(back.bolt_force.values, ds.bolt_force.values)
     back.close()
+
+
+# ------------------------------------------------------- the bolts' vibration and the step
+def _hung(stiffness=2.2e7, point=(0.5, 0.5), anchor=(0.5, 2.5), strength=None, size=1.0):
+    """A free square of ``size`` hung from a fixed roof by one bolt, nothing else touching."""
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
+    scene = dda.Scene(gravity=G)
+    roof = scene.add_block(box(-1.0, 2.0, 5.0, 1.0), rock, fixed=True, name="roof")
+    block = scene.add_block(box(0.0, 0.0, size, size), rock, name="block")
+    scene.set_joint(JointMaterial(normal_penalty="auto", shear_penalty="auto",
+                                  friction=CoulombSingle(phi=PHI)))
+    scene.add_bolt(block, point, roof, anchor, stiffness=stiffness, strength=strength)
+    return scene, 2600.0 * size**2 * G
+
+
+def test_released_peak_follows_the_one_mass_newmark_step():
+    from dda.bolts import released_peak
+
+    # gamma = 1 damps a half period by exp(-pi omega dt / 4): 1 - pi^2 / (4 N) for many N
+    for n in (200.0, 1000.0, 5000.0):
+        deficit = 1.0 - released_peak(n)
+        assert deficit == pytest.approx(np.pi**2 / (4.0 * n), rel=0.015)
+    assert released_peak(2e4) == pytest.approx(1.0 - np.pi**2 / 8e4, rel=1e-12)
+    peaks = [released_peak(n) for n in (3, 10, 30, 100, 300)]
+    assert np.all(np.diff(peaks) > 0.0) and peaks[-1] < 1.0
+    with pytest.raises(ValueError, match="positive"):
+        released_peak(0.0)
+
+
+def test_shortest_period_sees_the_blocks_rigid_mass_at_the_bolts_point():
+    from dda.bolts import shortest_period
+    from dda.model import Model
+
+    m, polar = 2600.0, 2600.0 / 6.0  # a 1 m square: m, and m (1 + 1) / 12 about its centroid
+    k = 2.2e7
+    # through the centroid along its axis: the block's mass alone
+    period, what = shortest_period(Model(_hung(k)[0]))
+    assert period == pytest.approx(2.0 * np.pi * np.sqrt(m / k), rel=1e-12)
+    assert "block 'block'" in what
+    # at a corner, pulled at right angles to the arm (0.5, -0.5) along (1, 1) / sqrt 2:
+    # the inverse mass 1 / m + (r x n)^2 / I
+    scene, _ = _hung(k, point=(1.0, 0.0), anchor=(3.5, 2.5))
+    inverse = 1.0 / m + 0.5 / polar
+    assert shortest_period(Model(scene))[0] == pytest.approx(
+        2.0 * np.pi / np.sqrt(k * inverse), rel=1e-12)
+    # two equal free blocks joined by a bolt along the line of their centroids: 2 k / m
+    rock = LinearElastic(young=10e9, poisson=0.25, density=2600.0)
+    scene = dda.Scene(gravity=G)
+    a = scene.add_block(box(0.0, 0.0, 1.0, 1.0), rock)
+    b = scene.add_block(box(2.0, 0.0, 1.0, 1.0), rock)
+    scene.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                                  friction=CoulombSingle(phi=PHI)))
+    scene.add_bolt(a, (0.5, 0.5), b, (2.5, 0.5), stiffness=k)
+    assert shortest_period(Model(scene))[0] == pytest.approx(
+        2.0 * np.pi * np.sqrt(m / (2.0 * k)), rel=1e-12)
+    # two vertical bolts 0.25 m either side of the centroid: together 2 k / m (the block's
+    # rise), each alone k (1 / m + 0.25^2 / I) = 1.375 k / m, their rocking 0.75 k / m
+    scene, _ = _hung(k, point=(0.25, 0.5), anchor=(0.25, 2.5))
+    scene.add_bolt(scene.blocks[1], (0.75, 0.5), scene.blocks[0], (0.75, 2.5), stiffness=k)
+    period, what = shortest_period(Model(scene))
+    assert period == pytest.approx(2.0 * np.pi * np.sqrt(m / (2.0 * k)), rel=1e-12)
+    assert what == "the bolts on block 'block'"
+    no_bolts = dda.Scene(gravity=G)
+    no_bolts.add_block(box(0.0, 0.0, 1.0, 1.0), rock)
+    no_bolts.set_joint(JointMaterial(normal_penalty=1e10, shear_penalty=1e10,
+                                     friction=CoulombSingle(phi=PHI)))
+    assert shortest_period(Model(no_bolts)) == (float("inf"), "")
+
+
+@pytest.mark.parametrize("solver", SOLVERS, ids=SOLVER_IDS)
+def test_auto_dt_resolves_a_bolts_vibration(solver):
+    """A block let go from rest on a bolt swings it to twice its weight (less Newmark's
+    damping): under dt="auto" its peak is within 1% of 2 W, and a bolt of 1.5 W breaks.
+    (The fall's dt of 0.032 s alone resolved the 82 ms period in 2.6 steps: 1.31 W.)"""
+    scene, weight = _hung()
+    sim = dda.Simulation(scene, dt="auto", solver=solver)
+    assert "bolt's vibration" in sim.choices
+    result = sim.run(0.1)
+    peak = float(result.bolt_force(0).max())
+    assert peak == pytest.approx(2.0 * weight, rel=0.01)
+    scene, weight = _hung(strength=1.5 * 2600.0 * G)
+    result = dda.Simulation(scene, dt="auto", solver=solver).run(0.1)
+    assert result.bolt_broken(0)[-1]
+
+
+def test_static_auto_dt_has_no_bolt_vibration():
+    scene, _ = _hung()
+    sim = dda.Simulation(scene, dt="auto", analysis="static")
+    assert "bolt" not in sim.choices
+
+
+def test_a_step_that_skips_a_bolts_vibration_is_warned_of():
+    from dda.plausibility import PlausibilityWarning
+
+    period = 2.0 * np.pi * np.sqrt(2600.0 / 2.2e7)  # 82 ms
+    with pytest.warns(PlausibilityWarning, match=r"bolt 0 .*34% off the peak force"):
+        dda.Simulation(_hung()[0], dt=period / 2.6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        dda.Simulation(_hung()[0], dt=period / 25.0)
