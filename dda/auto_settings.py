@@ -234,13 +234,17 @@ class AutoChoice:
 
 
 def _samples(histories, duration: float | None):
-    """Each history's acceleration sampled at 1 kHz (or its record's finest spacing) from 0
-    to ``duration`` (default: the record's end, at most ``PROBE_SECONDS``): ``(step, a)``
-    pairs, ``a`` of shape (n, 2)."""
+    """Each history's acceleration sampled at 1 kHz (or its record's sampling interval, the
+    median spacing of its samples, where that is finer) from 0 to ``duration`` (default: the
+    record's end, at most ``PROBE_SECONDS``): ``(step, a)`` pairs, ``a`` of shape (n, 2).
+
+    Not the finest spacing: a jump written as two samples 1e-12 s apart, or two records
+    merged at the union of their times that differ in the last bit (5.6e-17 s), asked for
+    1e17 samples (a MemoryError of 1.88 EiB; an earthquake engineer's review, 2026-12-07)."""
     span = min(duration, PROBE_SECONDS) if duration else PROBE_SECONDS
     out = []
     for h in histories:
-        step = min(1e-3, h.min_spacing)
+        step = min(1e-3, h.typical_spacing)
         t = np.arange(0.0, min(span, h.end_time), step)
         if len(t) >= 8:
             out.append((step, h.sample(t)))
@@ -252,7 +256,7 @@ def shaking_frequency(histories, duration: float | None = None) -> float | None:
     the highest over ``histories`` (:class:`dda.effects.AccelerationHistory`, both
     components); None when there is no shaking (or it is constant).
 
-    Each history is sampled at 1 kHz (or at its record's finest spacing) from 0 to
+    Each history is sampled at 1 kHz (or at its record's sampling interval) from 0 to
     ``duration`` (default: the record's end, at most ``PROBE_SECONDS``).
 
     Examples

@@ -189,6 +189,13 @@ class AccelerationHistory:
         """The finest spacing of a record's samples (s); inf for a callable."""
         return np.inf if self._callable is not None else float(np.diff(self._times).min())
 
+    @property
+    def typical_spacing(self) -> float:
+        """The median spacing of a record's samples (s), its sampling interval; inf for a
+        callable. Unlike :attr:`min_spacing` it does not see a jump written as two samples
+        a hair apart."""
+        return np.inf if self._callable is not None else float(np.median(np.diff(self._times)))
+
     def sample(self, t: np.ndarray) -> np.ndarray:
         """(n, 2) acceleration at the times ``t`` (a record: linear between its samples)."""
         t = np.asarray(t, dtype=float)

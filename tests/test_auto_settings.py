@@ -219,6 +219,12 @@ def test_the_shaking_frequency_of_records_and_callables():
     assert shaking_frequency([two], duration=10.0) == pytest.approx(8.0, abs=0.1)
     assert shaking_frequency([]) is None
     assert shaking_frequency([AccelerationHistory(lambda s: (1.0, 0.0))]) is None
+    # a jump written as two samples 1e-12 s apart is probed at the record's sampling
+    # interval, not at 1e-12 s (36.4 TiB asked for); its frequency is the 3 Hz sine's
+    jump = np.concatenate([t[:400], [t[399] + 1e-12], t[400:]])
+    values = np.sin(2 * np.pi * 3.0 * jump)
+    values[400:] += 0.01
+    assert shaking_frequency([AccelerationHistory(values, jump)]) == pytest.approx(3.0, abs=0.1)
 
 
 def test_a_given_penalty_stays_and_a_lone_auto_shear_follows_it():

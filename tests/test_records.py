@@ -249,6 +249,23 @@ def test_on_common_times_is_exact_for_piecewise_linear_records():
     np.testing.assert_allclose(b[np.isin(np.round(t, 12), np.round(tb, 12))], vb[:7])
 
 
+def test_on_common_times_takes_times_a_bit_apart_as_one():
+    """A 200 Hz record and a 100 Hz one: 0.005 k and k / 100 differ in the last bit at
+    every other shared instant; the union's 5.6e-17 s spacings were kept as samples (and the
+    automatic dt then probed the shaking at that spacing: a MemoryError of 1.88 EiB)."""
+    ta, tb = np.arange(2001) * 0.005, np.arange(1001) / 100.0
+    assert np.diff(np.union1d(ta, tb)).min() < 1e-15  # the records as they come
+    va, vb = np.sin(ta * 7.0), np.cos(tb * 5.0)
+    t, a, b = on_common_times(ta, va, tb, vb)
+    np.testing.assert_array_equal(t, ta)  # every 100 Hz time is a 200 Hz one
+    np.testing.assert_allclose(b[::2], vb, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(a, va)
+    # a record's own jump, two samples a hair apart, is kept
+    tj = np.array([0.0, 1.0, 1.0 + 1e-12, 5.0])
+    t, a, _ = on_common_times(tj, np.array([0.0, 0.0, 2.0, 2.0]), ta, va)
+    assert 1.0 in t and 1.0 + 1e-12 in t
+
+
 # ---------------------------------------------------------------------- scene files
 SHAKE = 'sine = { amplitude = 2.0, frequency = 2.0, start = 0.01 }'
 
