@@ -10,7 +10,7 @@ import numpy as np
 from dda import geometry
 from dda._checks import finite_number, finite_vector
 from dda.bolts import bolt_label, outside_distance
-from dda.contact.detection import overlap_depths
+from dda.contact.detection import TOUCH_TOLERANCE, overlap_depths
 from dda.contact.joint import JointMaterial
 from dda.effects import AccelerationHistory, DisplacementHistory, LoadHistory
 from dda.errors import OverlapError
@@ -29,7 +29,7 @@ MAX_VERTICES = 100_000
 #: blocks overlapping at the start by less than this fraction of the smaller one's size count
 #: as touching: coordinates typed with 6 decimals put neighbours about 1e-7 m into each other,
 #: and their contacts take that up in the first step
-OVERLAP_TOLERANCE = 1e-6
+OVERLAP_TOLERANCE = TOUCH_TOLERANCE
 
 
 @dataclass(frozen=True)

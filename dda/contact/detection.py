@@ -18,7 +18,11 @@ A vertex-edge pair is a contact candidate when
 3. the gap lies in ``[-penetration_limit, search_distance]``, and a negative gap (the vertex
    behind the edge's line) counts only when the vertex is inside the edge's block, no deeper
    behind the line than it is inside the block (its distance to the block's boundary) plus
-   ``sunk_depth`` (a vertex sunk into the block deeper than ``sunk_depth`` is exempt);
+   ``sunk_depth`` (a vertex sunk into the block deeper than ``sunk_depth`` is exempt); or
+   when it touches: no farther behind the line and outside the block than
+   ``TOUCH_TOLERANCE`` of the pair's smaller block (two voussoirs whose extrados chords fall
+   away from a shared corner, built 1e-8 m into each other: each corner lies behind the
+   other's joint face and just above its chord, and neither got a contact);
 4. the vertex is locally the first point of its block to cross the edge's line: both of its
    edges leave it towards the outside of that line, within ``ENTRANCE_TOLERANCE_DEG``, and
    its outward bisector does not point the way of the edge's outward normal (a sharp wedge
@@ -76,6 +80,11 @@ MIRROR_TOLERANCE_DEG = 5.0
 _XI_TOL = 1e-9
 # gaps to two edges within this fraction of the edge length are a tie (round-off)
 _GAP_TIE = 1e-9
+#: blocks that overlap by less than this fraction of the smaller one's size (the larger side
+#: of its bounding box) touch: the scene accepts them (``dda.scene.OVERLAP_TOLERANCE``), and
+#: the narrow phase takes a vertex that far behind an edge's line and that far outside its
+#: block for a contact on the edge (rule 3)
+TOUCH_TOLERANCE = 1e-6
 
 
 class Memo:
@@ -769,6 +778,9 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
             j = pairs[q, s]
             k = pairs[q, 1 - s]
             sunk_depth = min(sunk_depths[j], sunk_depths[k])
+            touch = TOUCH_TOLERANCE * min(
+                max(boxes[j, 2] - boxes[j, 0], boxes[j, 3] - boxes[j, 1]),
+                max(boxes[k, 2] - boxes[k, 0], boxes[k, 3] - boxes[k, 1]))
             xmin = boxes[k, 0] - margin
             ymin = boxes[k, 1] - margin
             xmax = boxes[k, 2] + margin
@@ -810,7 +822,8 @@ def _narrow_kernel(x, offsets, nxt, prv, pairs, boxes, margin, convex, reflex, b
                         if deep:
                             sunk = True
                             reach = search_distance + depth
-                        if not inside and not depth <= gap_tie * length:
+                        if not inside and not (depth <= gap_tie * length
+                                               or depth <= touch and -gap <= touch):
                             continue
                         if -gap > depth + sunk_depth:
                             if not sunk:
