@@ -27,10 +27,11 @@ __version__ = "0.1.0"
 
 
 def __getattr__(name):
-    # dda.studies (sweeps, the factor of safety: dda.studies.strength_reduction) is imported
-    # on first use, so that ``import dda`` does not load the sweep runner
-    if name == "studies":
+    # dda.studies (sweeps, the factor of safety: dda.studies.strength_reduction) and dda.plot
+    # (matplotlib, pyvista) are imported on first use, so that ``import dda`` loads neither
+    # the sweep runner nor the plotting libraries
+    if name in ("studies", "plot"):
         import importlib
 
-        return importlib.import_module("dda.studies")
+        return importlib.import_module(f"dda.{name}")
     raise AttributeError(f"module 'dda' has no attribute {name!r}")

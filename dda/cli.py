@@ -159,7 +159,12 @@ def describe(loaded, budget: float = 2.0) -> str:
     estimated from steps actually run: the first 3 (the compiled kernels load: a start-up cost
     every run pays), then as many as ``budget`` seconds allow, the run's own cost when that is
     all of them, and one VTU frame's write times the frames."""
-    from dda.contact.detection import narrow_phase
+    from dda.contact.detection import (
+        bounding_boxes,
+        broad_phase,
+        narrow_phase,
+        pairs_with_free_block,
+    )
 
     scene = loaded.scene
     sim = loaded.simulation()
@@ -170,7 +175,10 @@ def describe(loaded, budget: float = 2.0) -> str:
     rigid = sum(1 for i, b in enumerate(inputs) if b.rigid and model.free[i])
     unknowns = 6 * int(np.count_nonzero(model.free)) - 3 * rigid
     size = float(np.max(model.size))
-    touch = narrow_phase(model.x_initial, model.topo, 1e-6 * size, 1e-6 * size)
+    # blocks whose motion is known never get a contact between them (step._pairs)
+    pairs = pairs_with_free_block(broad_phase(bounding_boxes(model.x_initial, model.offsets),
+                                              1e-6 * size), model.free)
+    touch = narrow_phase(model.x_initial, model.topo, 1e-6 * size, 1e-6 * size, pairs)
     laws = ", ".join(sorted({type(law).__name__ for law in model.joints.laws}))
     lines = [
         f"scene      {loaded.path}",
@@ -187,11 +195,18 @@ def describe(loaded, budget: float = 2.0) -> str:
     lines += [("auto       " if k == 0 else "           ") + line
               for k, line in enumerate(sim.choices.splitlines())]
     if loaded.duration is not None:
+        # a record that ends before the run: the run refuses it at once, and so does this
+        for s in model.shakes:
+            s.history.check_covers(sim.committed.time + loaded.duration)
         steps = int(np.ceil(loaded.duration / sim.dt - 1e-9))
         per_step, startup, done, warm = _time_steps(sim, steps, budget)
-        # 'dda run' writes a VTU frame every [output] every steps (a script's run: its
-        # writer's, or none): time one
-        frames = 0 if loaded.every is None else steps // max(loaded.every, 1) + 1
+        # 'dda run' writes a VTU frame every [output] every steps, or one each [output]
+        # interval of simulated time (a script's run: its writer's, or none): time one
+        interval = getattr(loaded, "interval", None)
+        if interval:
+            frames = int(np.floor(loaded.duration / interval + 1e-9)) + 1
+        else:
+            frames = 0 if loaded.every is None else steps // max(loaded.every, 1) + 1
         per_frame = 0.0
         if frames:
             with tempfile.TemporaryDirectory() as folder:
@@ -229,6 +244,7 @@ class _ScriptRun:
     sim: object
     duration: float | None
     every: int | None  # VTU frames every this many steps (None: the run writes none)
+    interval: float | None = None  # ... or one each this much simulated time (s)
 
     @property
     def scene(self):
@@ -278,10 +294,12 @@ def _first_run(path) -> _ScriptRun:
         _run_script(path, None)
     except _FirstRun as first:
         sim, duration, output = first.args
-        every = getattr(output if output is not None else sim.output, "every", None)
+        writer = output if output is not None else sim.output
+        every = getattr(writer, "every", None)
         if duration is None and sim._resume_end is not None:
             duration = sim._resume_end - sim.committed.time
-        return _ScriptRun(f"{path} (the first simulation it runs)", sim, duration, every)
+        return _ScriptRun(f"{path} (the first simulation it runs)", sim, duration, every,
+                          getattr(writer, "interval", None))
     finally:
         Simulation.run = real
     raise ValueError(f"{path} ran to its end without running a dda.Simulation in its own "

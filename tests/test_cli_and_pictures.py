@@ -191,6 +191,38 @@ def test_info_describes_the_scene(series, capsys):
     assert " s to start, " in out and "(timed on all of them)" in out and "11 VTU frames" in out
 
 
+def test_info_counts_the_frames_of_an_interval_and_no_pairs_of_fixed_blocks(tmp_path, capsys):
+    """``[output] interval`` writes a frame each interval of simulated time: 0.1 s at 0.02 s
+    is 6 frames, not one a step (an earthquake engineer's review: 29,894 frames estimated
+    where 151 were written). A second fixed block touching the base adds no block pair
+    (their contacts act on no unknown, and the run makes none)."""
+    text = SCENE.replace('every = 5', 'interval = 0.02').replace('[[shake]]', """[[blocks]]
+name = "wall"
+material = "rock"
+vertices = [[3, 0], [3.5, 0], [3.5, 1.0], [3, 1.0]]
+fixed = true
+[[shake]]""")
+    scene = tmp_path / "interval.toml"
+    scene.write_text(text)
+    assert main(["info", str(scene)]) == 0
+    out = capsys.readouterr().out
+    assert "for each of 6 VTU frames" in out
+    assert "contacts   2 vertex-edge pairs touching at the start (1 block pair)" in out
+
+
+def test_info_refuses_a_record_that_ends_before_the_run(tmp_path, capsys):
+    """As 'dda run' does, at once: it printed a cost, or failed naming a time that was
+    neither the record's end nor the run's (where its timing steps crossed the end)."""
+    text = SCENE.replace('sine = { amplitude = 6.0, frequency = 5.0, form = "sine" }  '
+                         '# full amplitude at once: slips',
+                         'times = [0.0, 0.02, 0.05]\nvalues = [0.0, 3.0, -3.0]')
+    scene = tmp_path / "short.toml"
+    scene.write_text(text)
+    assert main(["info", str(scene)]) != 0
+    err = capsys.readouterr().err
+    assert "ends at t = 0.05 s but the run goes to t = 0.1 s" in err
+
+
 SCRIPT = """
 from pathlib import Path
 
@@ -655,3 +687,12 @@ def test_a_part_of_a_field_is_shown_by_name(series):
         _blocks_mesh(_pyvista(), last, "stress:s3")
     with pytest.raises(ValueError, match="'rotation' has no part 'x' .it has no parts"):
         _blocks_mesh(_pyvista(), last, "rotation:x")
+
+
+def test_dda_plot_is_there_after_import_dda_alone():
+    """The README's ``dda.plot.history(...)`` after ``import dda``: an AttributeError until
+    dda.plot was imported by name; ``import dda`` still loads no plotting library."""
+    code = ("import sys, dda\n"
+            "assert 'matplotlib' not in sys.modules\n"
+            "assert callable(dda.plot.history) and callable(dda.plot.render_frame)\n")
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)
