@@ -96,16 +96,20 @@ def write_synthetic(path: Path, **kwargs) -> Path:
     return path
 
 
-def plot(result, record, base, moved_in_time, path: Path):
+def plot(result, record, base, moved_in_time, path: Path, scale: float = 1.0) -> float:
+    """``OUT/record.png``: the record as the base followed it (times ``scale``), the base's
+    displacement, and how far the face moved; returns the peak drawn (g)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     fig, (ax1, ax2, ax3) = plt.subplots(3, 1, sharex=True, figsize=(7, 6.5))
-    ax1.plot(record.times, record.acceleration / G, lw=0.7, color="0.3")
+    drawn = scale * record.acceleration / G  # the record as the base followed it
+    ax1.plot(record.times, drawn, lw=0.7, color="0.3")
     ax1.set_ylabel("base acceleration (g)")
-    ax1.set_title(f"Jointed slope shaken by {Path(record.path).name}")
+    scaled = "" if scale == 1.0 else f" x {scale:g}"
+    ax1.set_title(f"Jointed slope shaken by {Path(record.path).name}{scaled}")
     ax2.plot(result.time, 1e3 * result.displacement(base)[:, 0], color="C0")
     ax2.set_ylabel("base displacement (mm)")
     median, most = moved_in_time
@@ -117,6 +121,7 @@ def plot(result, record, base, moved_in_time, path: Path):
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+    return float(np.abs(drawn).max())
 
 
 def main(argv=None):
@@ -161,7 +166,7 @@ def main(argv=None):
     base_u = result.displacement(base)
     moved = np.array([np.hypot(*(result.displacement(b) - base_u).T) for b in face])
     median, most = np.median(moved, axis=0), moved.max(axis=0)
-    plot(result, record, base, (median, most), out / "record.png")
+    plot(result, record, base, (median, most), out / "record.png", args.scale)
     print(f"after {duration:g} s the face blocks moved {1e3 * median[-1]:.1f} mm (median) and "
           f"{1e3 * most[-1]:.1f} mm (most) against the base; the base ended "
           f"{1e3 * base_u[-1, 0]:.1f} mm from its start")

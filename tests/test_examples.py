@@ -126,7 +126,7 @@ def test_user_friction_law(capsys):
                                runs[("brittle", "newton")][1], rtol=1e-6, atol=1e-9)
 
 
-def test_recorded_shaking_example(tmp_path, capsys):
+def test_recorded_shaking_example(tmp_path, capsys, monkeypatch):
     """The jointed slope shaken by a record: without --record the example writes its
     synthetic .AT2 (0.3 g, ends at rest) and says so; with a K-NET file of one's own it reads
     that, scaled and baseline corrected. Short runs: they write their files and stay finite."""
@@ -152,11 +152,18 @@ def test_recorded_shaking_example(tmp_path, capsys):
     t, a = example.synthetic_record(duration=0.5)
     counts = np.round(a * 100 / (3920 / 6182761)).astype(int)
     rows = [" ".join(f"{c:8d}" for c in counts[k:k + 8]) for k in range(0, len(counts), 8)]
-    from tests.test_records import KNET_HEADER
+    from tests.test_records import knet_header
 
     knet = tmp_path / "own.EW"
-    knet.write_text(KNET_HEADER.format(freq=100, direction="E-W", scale="3920(gal)/6182761")
-                    + "\n".join(rows))
+    knet.write_text(knet_header(counts, direction="E-W") + "\n".join(rows))
+    drawn = []
+    real_plot = example.plot
+
+    def plot(*args, **kwargs):
+        drawn.append(real_plot(*args, **kwargs))
+        return drawn[-1]
+
+    monkeypatch.setattr(example, "plot", plot)
     result, record, moved = example.main(["--out", str(tmp_path / "knet"), "--record",
                                           str(knet), "--duration", "0.03", "--scale", "0.5",
                                           "--baseline", "quadratic"])
@@ -166,6 +173,8 @@ def test_recorded_shaking_example(tmp_path, capsys):
 
     own = read_knet(knet)  # the counts' mean taken away moves the peak a little: 0.148 g
     assert f"peak {0.5 * own.peak / 9.80665:.3f} g" in out and "quadratic baseline" in out
+    # the picture draws the record as scaled (it drew the file's, twice the peak printed)
+    assert drawn == [pytest.approx(0.5 * record.peak / 9.80665, rel=1e-12)]
     assert own.peak == pytest.approx(0.3 * 9.80665, rel=0.02)
     assert record.baseline == "quadratic" and abs(record.end_motion()[0]) < 1e-12
     assert np.all(np.isfinite(moved))

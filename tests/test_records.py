@@ -3,6 +3,7 @@ exactly, errors that name the file and the line, baseline correction, and the sc
 [[shake]] file = ... with scale, direction, vertical and baseline."""
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -22,6 +23,7 @@ from dda.io.records import (
 )
 from dda.io.scene_data import ArrayStore, scene_from_data, scene_to_data
 from dda.io.scene_file import SceneFileError, load_scene
+from dda.plausibility import PlausibilityWarning
 from tests.test_scene_file import FULL, write
 
 # PEER NGA-West2: Fortran E format, five a line, a "stuck" negative on the last line
@@ -56,16 +58,28 @@ Sampling Freq(Hz) {freq}Hz
 Duration Time(s)  300
 Dir.              {direction}
 Scale Factor      {scale}
-Max. Acc. (gal)   2700.044
+Max. Acc. (gal)   {peak}
 Last Correction   2011/03/11 14:46:29
 Memo.
 """
 COUNTS = np.array([6699, 6650, 6612, 6597, 6572, 6535, 6525, 6542, 6580, 6611, 7000, 6100])
 
 
+def knet_header(counts, freq=100, direction="N-S", scale="3920(gal)/6182761"):
+    """The header of a K-NET file of ``counts``, its Max. Acc. theirs (to 3 decimals, as
+    NIED writes it)."""
+    try:
+        num, den = (float(x) for x in scale.replace("(gal)", "").split("/"))
+        gal = np.asarray(counts) * num / den
+        peak = f"{float(np.abs(gal - gal.mean()).max()):.3f}"
+    except (ValueError, ZeroDivisionError):  # a scale factor a test makes wrong on purpose
+        peak = "2700.044"
+    return KNET_HEADER.format(freq=freq, direction=direction, scale=scale, peak=peak)
+
+
 def knet_text(counts=COUNTS, freq=100, direction="N-S", scale="3920(gal)/6182761"):
     rows = [" ".join(f"{c:8d}" for c in counts[k:k + 8]) for k in range(0, len(counts), 8)]
-    return KNET_HEADER.format(freq=freq, direction=direction, scale=scale) + "\n".join(rows)
+    return knet_header(counts, freq, direction, scale) + "\n".join(rows)
 
 
 def put(tmp_path, name, text):
@@ -126,6 +140,22 @@ def test_knet_counts_scale_factor_and_mean(tmp_path):
     # an offset in the counts (the instrument's) is what the mean takes away
     shifted = read_knet(put(tmp_path, "shifted.NS", knet_text(COUNTS + 5000)))
     np.testing.assert_allclose(shifted.acceleration, rec.acceleration, atol=1e-13)
+
+
+def test_knet_max_acc_against_the_counts(tmp_path):
+    """A scale factor pasted from another file scales the whole record; the header's Max.
+    Acc. shows it (an earthquake engineer's review: 5000 gal stated over 393 gal read
+    without a word). Within 1% (and the header's 3 decimals) nothing is said."""
+    text = knet_text()
+    stated = text.splitlines()[14]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PlausibilityWarning)
+        read_knet(put(tmp_path, "ok.NS", text))
+        read_knet(put(tmp_path, "blank.NS", text.replace(stated, "Max. Acc. (gal)")))
+    wrong = text.replace(stated, "Max. Acc. (gal)   5000.000")
+    with pytest.warns(PlausibilityWarning, match=r"wrong.NS, line 15: Max. Acc. 5000 gal, but "
+                      r"the counts .* peak at 0.3\d+ gal .*Scale Factor the file's own"):
+        read_knet(put(tmp_path, "wrong.NS", wrong))
 
 
 def test_kiknet_suffixes_and_200_hz(tmp_path):
@@ -296,8 +326,13 @@ def test_scene_file_knet_horizontal_with_a_vertical_record(tmp_path):
     put(tmp_path, "MYG004.EW", knet_text(direction="E-W"))
     counts_ud = COUNTS[:9] - 6600
     put(tmp_path, "MYG004.UD", knet_text(counts_ud, freq=50, direction="U-D"))
-    loaded = scene_with(tmp_path, 'file = "MYG004.EW"\nvertical = "MYG004.UD"\n'
-                                  'scale = 0.5\nbaseline = "mean"')
+    # the horizontal record ends first: the scene file says so, naming its line (a run past
+    # the end was refused naming only the shaken block)
+    with pytest.warns(PlausibilityWarning, match=r"scene.toml, line \d+, shake\[0\].file: "
+                      r"MYG004.EW ends at t = 0.11 s, 0.05 s before MYG004.UD: the shaking "
+                      r"covers the 0.11 s both records cover"):
+        loaded = scene_with(tmp_path, 'file = "MYG004.EW"\nvertical = "MYG004.UD"\n'
+                                      'scale = 0.5\nbaseline = "mean"')
     t, a = recorded(loaded)
     ew = read_knet(tmp_path / "MYG004.EW", baseline="mean")
     ud = read_knet(tmp_path / "MYG004.UD", baseline="mean")

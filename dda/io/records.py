@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import re
+import warnings
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -466,10 +467,32 @@ def read_knet(path, baseline: str = "none") -> Record:
         raise _error(path, None, "a value is not finite")
     gal = counts * (num / den)
     gal -= gal.mean()
+    _check_peak(path, header["Max. Acc. (gal)"], float(np.abs(gal).max()))
     rec = Record(times=np.arange(len(counts)) / freq, acceleration=gal / 100.0, dt=1.0 / freq,
                  format="knet", path=str(path), station=header["Station Code"],
                  direction=header["Dir."], scale_factor=num / den / 100.0, header=header)
     return rec.corrected(baseline)
+
+
+def _check_peak(path, stated: str, peak: float) -> None:
+    """A PlausibilityWarning when a K-NET header's ``Max. Acc. (gal)`` (``stated``) is not
+    the peak of its counts times its scale factor less their mean (``peak``, gal) to 1%: a
+    scale factor pasted from another file (KiK-net's 7845(gal)/8223790 on K-NET counts)
+    would scale the whole record wrongly, and nothing else shows it. Nothing when the header
+    gives no number."""
+    try:
+        header = float(stated)
+    except ValueError:
+        return
+    if not (math.isfinite(header) and header > 0.0):
+        return
+    if abs(peak - header) > 0.01 * header + 0.001:
+        from dda.plausibility import PlausibilityWarning  # noqa: PLC0415
+
+        warnings.warn(f"{Path(path).name}, line 15: Max. Acc. {header:g} gal, but the counts "
+                      f"times the Scale Factor, less their mean, peak at {peak:.4g} gal "
+                      f"({peak / header:.3g} times it): is the Scale Factor the file's own?",
+                      PlausibilityWarning, stacklevel=4)
 
 
 # ---------------------------------------------------------------------- writing

@@ -910,6 +910,15 @@ def _shake_file(r, s, p, folder):
         if av.shape[1] != 1:
             raise r.error((*p, "vertical"), f"{s['vertical']} has two components: vertical "
                                             "takes a record of one")
+        if abs(tv[-1] - t[-1]) > 1e-9 * max(t[-1], tv[-1]):
+            # the shaking covers the time both cover: a run past it is refused, and that
+            # message knows only the shaken block
+            short, end, other = (("vertical", tv[-1], t[-1]) if tv[-1] < t[-1]
+                                 else ("file", t[-1], tv[-1]))
+            warnings.warn(str(r.error((*p, short), (
+                f"{s[short]} ends at t = {end:g} s, {other - end:.3g} s before "
+                f"{s['vertical' if short == 'file' else 'file']}: the shaking covers the "
+                f"{end:g} s both records cover"))), PlausibilityWarning, stacklevel=4)
         t, a, av = records.on_common_times(t, a, tv, av)
         a[:, 1] += scale * av[:, 0]
     return t, a
