@@ -179,6 +179,21 @@ says what it chose and why. The rule, and the measurements it comes from
    1.31 W: a bolt of strength 1.5 W survived that breaks at 1.94 W with dt 1e-3 s (an
    underground review of the session of 2026-12-07).
 
+9. **A static analysis's step shows a mechanism** (``analysis="static"``): a static step
+   starts at rest, so a block under an unbalanced acceleration ``a`` moves ``a dt^2 / 2`` a
+   step, and a dynamic-sized dt hides a mechanism: a masonry arch 2% thinner than its limit,
+   static at the fall's 1e-3 s, crept 0.19 mm in 4 s and 3,954 steps and looked as if it
+   stood, where at 0.05 s it moved 25 mm in 80 steps (a masonry review of the session of
+   2026-12-07). The step is that of a static trial of the factor of safety
+   (:mod:`dda.studies.factor_of_safety`) with its defaults: ``STATIC_STEPS`` (40) steps
+   move the smallest free block by ``STATIC_DISPLACEMENT_RATIO`` (1%) of its size under an
+   unbalanced acceleration of ``STATIC_RESOLUTION`` (1e-3) g,
+   ``dt = sqrt(4 d / (40 a))`` (an acceleration held for ``N`` static steps moves a block
+   ``N a dt^2 / 2``; the factor of safety's second half counts), capped at 50 contact
+   periods ``2 pi sqrt(m / p)`` of the lightest free block on the stiffest joint. Rules 1,
+   6, 7 and 8 are for time: they do not apply, and the penalty (rules 2 to 5) is not held to
+   the inertia of a step that has none.
+
 A joint with a number keeps it; only "auto" values are chosen, all with the same rule (the
 lightest free block and the most loaded contact of the scene).
 
@@ -206,8 +221,9 @@ from dda.contact.friction import FrictionLaw
 from dda.penalty_advice import TARGET_DEPTH
 
 __all__ = ["AutoChoice", "BOLT_STEPS_PER_PERIOD", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS",
-           "choose", "largest_onset_drop", "penalty_floor", "shaking_frequency",
-           "steps_for_drop"]
+           "STATIC_CAP_PERIODS", "STATIC_DISPLACEMENT_RATIO", "STATIC_RESOLUTION",
+           "STATIC_STEPS", "choose", "largest_onset_drop", "penalty_floor",
+           "shaking_frequency", "steps_for_drop"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block, for
 #: a solver without its own ``auto_kappa`` (legacy DDA's; the fully implicit method takes 10)
@@ -221,6 +237,13 @@ PROBE_SECONDS = 20.0
 ENERGY_SHARE = 0.99
 #: steps a period of the fastest bolt's vibration (rule 8): its peak force 1% low
 BOLT_STEPS_PER_PERIOD = 250
+#: a static analysis's step (rule 9): this many steps move the smallest free block by
+#: STATIC_DISPLACEMENT_RATIO of its size under an unbalanced STATIC_RESOLUTION g, ...
+STATIC_STEPS = 40
+STATIC_DISPLACEMENT_RATIO = 0.01
+STATIC_RESOLUTION = 1e-3
+#: ... capped at this many contact periods of the lightest free block on the stiffest joint
+STATIC_CAP_PERIODS = 50.0
 
 
 @dataclass(frozen=True)
@@ -465,7 +488,18 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     name = model.block_label(light)
     steps = int(getattr(solver, "auto_steps_per_period", 300))
     kappa = float(getattr(solver, "auto_kappa", KAPPA))
-    if dt is None:
+    if dt is None and not dynamic:  # rule 9
+        if g <= 0.0:
+            raise ValueError("auto settings: a static analysis without gravity has no "
+                             "acceleration to set its step by; give dt")
+        d = STATIC_DISPLACEMENT_RATIO * float(np.min(model.size[free]))
+        a = STATIC_RESOLUTION * g
+        dt = float(np.sqrt(4.0 * d / (STATIC_STEPS * a)))
+        lines.append(f"dt: a static step ({STATIC_STEPS} of them move the smallest free block "
+                     f"{100 * STATIC_DISPLACEMENT_RATIO:g}% of its size, {d:.3g} m, under an "
+                     f"unbalanced {STATIC_RESOLUTION:g} g): {dt:.3g} s")
+        auto_dt = "static"
+    elif dt is None:
         f = _frequency(samples)
         h_min = float(np.min(h[free]))
         drive = g + a_max
@@ -508,6 +542,9 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     else:
         auto_dt = False
     if not auto_penalty:
+        if auto_dt == "static":
+            dt = _static_cap(model, dt, np.asarray(model.joints.normal_penalty, dtype=float),
+                             m, name, lines)
         return AutoChoice(dt, np.nan, np.nan, "\n".join(lines))
     inertia = 2.0 * m / dt**2
     pn = kappa * inertia
@@ -539,9 +576,31 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
         reason = (f"normal penalty: {why}: {pn:.3g} N/m (joints softer than the rock soften "
                   f"the whole mass; {kappa:g} x the inertia 2 m / dt^2 of the lightest block "
                   f"would be {kappa * inertia:.3g} N/m)")
-    if auto_dt and pn > kappa * inertia:
+    if auto_dt is True and pn > kappa * inertia:
         dt = float(np.sqrt(kappa * 2.0 * m / pn))
         reason += f"; dt shortened to {dt:.3g} s to keep it at {kappa:g} x the inertia"
     lines.append(reason)
     lines.append("shear penalty: the normal penalty")
+    if auto_dt == "static":
+        penalties = np.asarray(model.joints.normal_penalty, dtype=float)
+        dt = _static_cap(model, dt, np.where(np.isfinite(penalties), penalties, pn), m, name,
+                         lines)
     return AutoChoice(dt, pn, pn, "\n".join(lines))
+
+
+def _static_cap(model, dt: float, penalties: np.ndarray, m: float, name: str,
+                lines: list) -> float:
+    """Rule 9's cap: a static ``dt`` at most ``STATIC_CAP_PERIODS`` contact periods
+    ``2 pi sqrt(m / p)`` of the lightest free block (mass ``m``, ``name``) on the stiffest of
+    the joints' ``penalties``; the reason added to ``lines`` when it binds."""
+    finite = penalties[np.isfinite(penalties)]
+    if not finite.size:
+        return dt
+    p = float(finite.max())
+    cap = STATIC_CAP_PERIODS * 2.0 * np.pi * np.sqrt(m / p)
+    if cap < dt:
+        lines.append(f"dt: capped at {STATIC_CAP_PERIODS:g} contact periods 2 pi sqrt(m / p) "
+                     f"of the lightest free block ({name}, {m:.3g} kg/m) on the stiffest "
+                     f"joint ({p:.3g} N/m): {cap:.3g} s")
+        return float(cap)
+    return dt

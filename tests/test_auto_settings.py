@@ -412,3 +412,50 @@ def test_a_spin_counts_at_the_farthest_vertex_and_a_static_analysis_starts_at_re
                                rtol=1e-12)
     static = dda.Simulation(thrown(), dt="auto", analysis="static")
     assert "impact" not in static.choices
+
+
+def _incline_block(slope_deg, phi=30.0):
+    """A 1 m square block on a fixed plane of ``slope_deg`` (friction ``phi``), "auto"."""
+    rock = LinearElastic(young=1e10, poisson=0.25, density=2500.0)
+    scene = dda.Scene(gravity=9.81)
+    th = np.radians(slope_deg)
+    c, s = np.cos(th), np.sin(th)
+    scene.add_block([(0, 0), (6 * c, 0), (6 * c, 6 * s)], rock, fixed=True)
+    p0, t, n = np.array([2 * c, 2 * s]), np.array([c, s]), np.array([-s, c])
+    scene.add_block([p0, p0 + t, p0 + t + n, p0 + n], rock, name="block")
+    scene.set_joint(JointMaterial("auto", "auto", CoulombSingle(phi=phi)))
+    return scene
+
+
+@pytest.mark.parametrize("solver", [LegacyPullBack(), NewtonRaphson()], ids=["legacy", "newton"])
+def test_a_static_auto_step_shows_a_mechanism(solver):
+    """Rule 9: 40 static steps move a block under an unbalanced 1e-3 g by 1% of its size.
+    On a plane 0.5 degrees steeper than its friction (an unbalanced 0.01 g) the block slides
+    0.2 m in 40 steps; 0.5 degrees flatter it settles on its springs (under 1%). At the
+    fall's dynamic step (0.032 s), which static analysis took before, the sliding block
+    moved 2 mm in 40 steps and could not be told from the standing one."""
+    from dda.auto_settings import STATIC_STEPS
+
+    moved = {}
+    for slope in (29.5, 30.5):
+        sim = dda.Simulation(_incline_block(slope), dt="auto", analysis="static",
+                             solver=solver)
+        assert "a static step" in sim.choices
+        # d = 4 x 1% x 1 m / (40 x 1e-3 g): 0.319 s
+        assert sim.dt == pytest.approx(np.sqrt(4 * 0.01 / (40 * 1e-3 * 9.81)), rel=1e-12)
+        result = sim.run(STATIC_STEPS * sim.dt, progress=False)
+        moved[slope] = float(np.hypot(*result.displacement("block")[-1]))
+    assert moved[29.5] < 0.01
+    # N steps of a dt^2 / 2, a = g (sin 30.5 - cos 30.5 tan 30) = 0.0991 m/s^2: 0.202 m
+    a = 9.81 * (np.sin(np.radians(30.5)) - np.cos(np.radians(30.5)) * np.tan(np.radians(30)))
+    assert moved[30.5] == pytest.approx(STATIC_STEPS * a * sim.dt**2 / 2, rel=0.05)
+
+
+def test_a_static_auto_step_is_capped_by_a_stiff_given_penalty():
+    """50 contact periods of the lightest block on the stiffest joint, as the factor of
+    safety's static trials are capped."""
+    scene = _incline_block(20.0)
+    scene.set_joint(JointMaterial(1e12, 1e12, CoulombSingle(phi=30.0)))
+    sim = dda.Simulation(scene, dt="auto", analysis="static")
+    assert sim.dt == pytest.approx(50 * 2 * np.pi * np.sqrt(2500.0 / 1e12), rel=1e-12)
+    assert "capped at 50 contact periods" in sim.choices
