@@ -34,6 +34,7 @@ from dda.penalty_advice import PenaltyAdvisor, PenaltyWarning, natural_step
 from dda.plausibility import (
     PlausibilityWarning,
     check_rate_laws_static,
+    check_shaking_resolution,
     check_time_step,
     check_water_table,
 )
@@ -201,7 +202,8 @@ class Simulation:
                             f"scene's size), got {locate_reversals!r}")
         self.locate_reversals = bool(locate_reversals)
         self.choices = ""
-        if auto_dt or self.model.joints.auto:
+        auto_penalty = bool(self.model.joints.auto)
+        if auto_dt or auto_penalty:
             choice = choose(self.model, solver, self.dt,
                             shakes=[s.history for s in scene.shakes],
                             auto_penalty=self.model.joints.auto,
@@ -214,6 +216,9 @@ class Simulation:
             self.choices = choice.text
         if analysis == "dynamic":  # a static step solves for equilibrium: no period
             check_time_step(self.model, self.dt)
+            check_shaking_resolution(self.model, self.dt, solver,
+                                     [s.history for s in scene.shakes], not auto_dt,
+                                     not auto_penalty)
         else:
             check_rate_laws_static(self.model.joints.laws, self.dt)
         check_water_table(self.model)
