@@ -124,7 +124,7 @@ def estimated_blocks(domain_bounds, domain_area: float, joint_sets) -> float:
 
 
 def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
-               max_blocks: int | None = None) -> list:
+               max_blocks: int | None = None, openings=()) -> list:
     """Cut a domain polygon into blocks along joint sets.
 
     Parameters
@@ -132,6 +132,13 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
     domain : (n, 2) array-like
         A simple polygon (any orientation), in metres.
     joint_sets : list of JointSet (or one)
+    openings : list of (m, 2) array-likes, optional
+        Excavations (a tunnel's or a cavern's outline, a circle as a polygon of many
+        corners): simple polygons taken out of the domain before it is cut, so that the
+        blocks around an opening end on its outline and the slivers it leaves are dropped
+        with the others. An opening may reach across the domain's boundary (a cutting, a
+        portal). Every block must still be simple: an opening that no joint trace reaches
+        lies inside one block, which would enclose it, and is refused.
     min_size : float, optional
         Blocks thinner than this (2 area / perimeter, half the side of a square) are dropped
         as slivers; by default a tenth of the smallest spacing. Slivers over 1% of the
@@ -159,14 +166,39 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
     from shapely.geometry.polygon import orient
     from shapely.ops import polygonize
 
+    if isinstance(domain, Polygon) and len(domain.interiors):
+        # a shapely polygon with holes: its holes are the openings
+        openings = [np.asarray(ring.coords) for ring in domain.interiors] + list(openings)
+        domain = np.asarray(domain.exterior.coords)
+    elif isinstance(domain, Polygon):
+        domain = np.asarray(domain.exterior.coords)
     try:
         dom = Polygon(np.asarray(domain, dtype=float))
     except (ValueError, TypeError) as exc:
-        raise ValueError(f"cut_blocks: domain must be (n, 2) corners, n >= 3 ({exc})") from None
+        raise ValueError(f"cut_blocks: domain must be (n, 2) corners, n >= 3 ({exc}); an "
+                         "opening in it goes to openings=") from None
     if not np.all(np.isfinite(np.asarray(dom.exterior.coords))):
         raise ValueError("cut_blocks: the domain's corners must be finite")
     if not dom.is_valid or dom.area <= 0.0:
         raise ValueError("cut_blocks: the domain must be a simple polygon with an area")
+    holes = []
+    for i, opening in enumerate(openings):
+        try:
+            hole = Polygon(np.asarray(opening, dtype=float))
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"cut_blocks: openings[{i}] must be (n, 2) corners, n >= 3 "
+                             f"({exc})") from None
+        if (not np.all(np.isfinite(np.asarray(hole.exterior.coords))) or not hole.is_valid
+                or hole.area <= 0.0):
+            raise ValueError(f"cut_blocks: openings[{i}] must be a simple polygon with an "
+                             "area and finite corners")
+        if not hole.intersects(dom):
+            raise ValueError(f"cut_blocks: openings[{i}] lies outside the domain")
+        holes.append(hole)
+    if holes:
+        dom = dom.difference(shapely.union_all(holes))
+        if dom.is_empty or dom.area <= 0.0:
+            raise ValueError("cut_blocks: the openings take the whole domain")
     sets = [joint_sets] if isinstance(joint_sets, JointSet) else list(joint_sets)
     for i, js in enumerate(sets):
         if not isinstance(js, JointSet):
@@ -186,7 +218,7 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
             "max_blocks); check the spacings (m) against the domain's size")
 
     rng = np.random.default_rng(seed)
-    lines = [dom.exterior]
+    lines = [dom.boundary]
     for js in sets:
         for seg in js.traces(dom.bounds, rng):
             piece = LineString(seg).intersection(dom)
@@ -206,6 +238,15 @@ def cut_blocks(domain, joint_sets, min_size: float | None = None, seed: int = 0,
         if face.area <= 0.0 or not dom.contains(face.representative_point()):
             continue
         if len(face.interiors):
+            inside = [i for i, hole in enumerate(holes)
+                      if any(Polygon(ring).contains(hole.representative_point())
+                             for ring in face.interiors)]
+            if inside:
+                raise ValueError(
+                    f"cut_blocks: openings[{inside[0]}] lies inside one block (no joint "
+                    "trace reaches it), which would enclose it; a DDA block is a simple "
+                    "polygon: a denser or more persistent set, or a trace through the "
+                    "opening, cuts it")
             raise ValueError(
                 "cut_blocks: a block would enclose another (a closed loop of traces that "
                 "meets no other joint); change the trace length or the seed")

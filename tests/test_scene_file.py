@@ -533,3 +533,26 @@ def test_a_multi_line_string_ends_at_the_last_three_of_its_quotes(value):
     rows = len(text.splitlines())
     assert key_lines(text) == {("a",): 1, ("b",): rows - 2, ("t",): rows - 1,
                                ("t", "c"): rows}
+
+
+def test_a_cut_with_an_opening(tmp_path):
+    """[[cut]] openings: outlines taken out of the domain before it is cut, as
+    dda.geometry.cut_blocks(..., openings=...) takes them; a bad outline names its line."""
+    from dda.geometry import JointSet, cut_blocks
+
+    opening = "openings = [[[2.9, 1.6], [3.1, 1.6], [3.1, 1.9], [2.9, 1.9]]]\n"
+    text = FULL.replace("min_size = 0.05\n", "min_size = 0.05\n" + opening)
+    loaded = load_scene(write(tmp_path, text))
+    cut = [inp for h, inp in zip(loaded.scene.blocks, loaded.scene.block_inputs, strict=True)
+           if h.name.startswith("cut")]
+    expected = cut_blocks([(2.5, 1), (3.5, 1), (3.5, 2), (2.5, 2)],
+                          [JointSet(dip=0.0, spacing=0.5, offset=0.25)], min_size=0.05,
+                          openings=[[(2.9, 1.6), (3.1, 1.6), (3.1, 1.9), (2.9, 1.9)]])
+    assert len(cut) == len(expected) == 3  # three strips, two notched by the opening
+    area = sum(0.5 * abs(np.cross(np.roll(v, -1, 0), v).sum())
+               for v in (np.asarray(b.vertices) for b in cut))
+    assert area == pytest.approx(1.0 - 0.06, rel=1e-9)
+    bad = FULL.replace("min_size = 0.05\n", "min_size = 0.05\nopenings = [[[2.9, 1.6]]]\n")
+    with pytest.raises(SceneFileError, match=r"line \d+, cut\[0\]: cut_blocks: openings\[0\] "
+                                             r"must be \(n, 2\) corners, n >= 3"):
+        load_scene(write(tmp_path, bad, "bad.toml"))

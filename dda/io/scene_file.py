@@ -51,6 +51,8 @@ The format (every table may be left out but ``[simulation]`` with its ``dt``, so
     seed = 0
     joint_sets = [{ dip = 30, spacing = 0.5, offset = 0.1 },
                   { dip = -60, spacing = 0.7, persistence = 0.8, trace_length = 2.0 }]
+    # openings = [[[1.8, 1.8], [2.2, 1.8], [2.2, 2.2], [1.8, 2.2]]]  # excavations taken
+                                          # out before the cut (outlines of [x, y])
 
     [[shake]]                             # a sine, a table, or a record file
     block = "base"
@@ -742,9 +744,15 @@ def _read_cuts(r, data, materials, add_block) -> dict:
     for i, c in enumerate(_array(r, data, "cut")):
         p = ("cut", i)
         r.table(c, p, {"name", "material", "domain", "joint_sets", "min_size", "seed",
-                       "fixed", "rigid"})
+                       "fixed", "rigid", "openings"})
         sets = _joint_sets(r, c, p)
         kwargs = {}
+        if "openings" in c:
+            if not isinstance(c["openings"], list):
+                raise r.error((*p, "openings"), "must be a list of outlines, each a list of "
+                                                "[x, y] pairs")
+            outlines = dict(enumerate(c["openings"]))
+            kwargs["openings"] = [r.points(outlines, (*p, "openings"), k) for k in outlines]
         if "min_size" in c:
             kwargs["min_size"] = r.number(c, p, "min_size")
         if "seed" in c:
