@@ -29,7 +29,7 @@ from dda.bolts import bolt_energy
 from dda.contact.contacts import OPEN
 from dda.water import water_energy
 
-__all__ = ["Energy", "energy"]
+__all__ = ["Energy", "WorkLedger", "energy"]
 
 
 @dataclass(frozen=True)
@@ -49,13 +49,16 @@ class Energy:
                 + self.water)
 
 
-def energy(sim, state=None) -> Energy:
+def energy(sim, state=None, free_only: bool = False) -> Energy:
     """The energy of a committed state (see the module docstring).
 
     ``sim`` is a :class:`dda.Simulation` (its committed state), or a :class:`dda.model.Model`
     with ``state`` the :class:`dda.step.StepState` to measure.
 
     Fixed and shaken blocks count too: their kinetic energy is that of the prescribed motion.
+    With ``free_only`` only the blocks with unknowns count (their springs, bolts and water
+    too): the energy an energy balance under shaking follows (:class:`WorkLedger`), without
+    the table's own motion and weight, which nothing in the scene pays for.
 
     Examples
     --------
@@ -76,15 +79,17 @@ def energy(sim, state=None) -> Energy:
     st = sim.committed if state is None else state
     ints = geometry.polygon_integrals(st.x, model.offsets)
     mass = geometry.mass_matrices(ints, model.density)
-    kinetic = 0.5 * float(np.einsum("bi,bij,bj->", st.velocity, mass, st.velocity))
+    counted = model.free if free_only else np.ones(model.n_blocks, dtype=bool)
+    v = np.where(counted[:, None], st.velocity, 0.0)
+    kinetic = 0.5 * float(np.einsum("bi,bij,bj->", v, mass, v))
     g = model.gravity or 0.0
     # from y = 0 of the scene's coordinates: about the model's origin, plus the constant
     # of each block's mass at the origin's height (a far scene's area, which strain
     # changes, times its y of 4e6 m made energy that never was)
-    potential = float(np.sum(g * model.density * ints.area * ints.centroid[:, 1]))
+    potential = float(np.sum(counted * g * model.density * ints.area * ints.centroid[:, 1]))
     origin_y = float(model.origin[1])
     if origin_y:
-        potential += float(np.sum(g * model.density * model.size**2)) * origin_y
+        potential += float(np.sum(counted * g * model.density * model.size**2)) * origin_y
     compliance = np.linalg.inv(model.elasticity)
     strain = 0.5 * float(np.einsum("b,bi,bij,bj->", ints.area, st.stress, compliance,
                                    st.stress))
@@ -100,3 +105,75 @@ def energy(sim, state=None) -> Energy:
     if model.water is not None:
         water = water_energy(model.water, st.x, model.topo.nxt, model.water_edges)
     return Energy(kinetic, potential, strain, contact, bolt, water)
+
+
+class WorkLedger:
+    """An energy balance of a run: the work put into the free blocks, and what was lost.
+
+    The free blocks' energy (:func:`energy` with ``free_only``) changes by the work done on
+    them from outside,
+
+        E_free(t) - E_free(0) = W_known + W_loads - D,
+
+    ``W_known`` the work of the blocks whose motion is known (a shaking table, a moved block)
+    through their contacts, step by step the contact force each pushes the free blocks with,
+    trapezoidal over the step, dotted with its displacement; ``W_loads`` the work of the point
+    loads, each step's force (taken at the step's end, as the step applies it) dotted with
+    its point's displacement; and ``D`` what friction, the dashpots, damping and Newmark's
+    gamma = 1 took out, never negative but for round-off. Not counted: bolts anchored in a
+    block whose motion is known, and the springs of a partial prescribed motion.
+
+    Pass it as the run's ``callback`` (it is called after every committed step)::
+
+        ledger = WorkLedger(sim)
+        sim.run(10.0, callback=ledger)
+        ledger.work_known, ledger.work_loads, ledger.dissipated()
+
+    Parameters
+    ----------
+    sim : dda.Simulation
+        Measured from its committed state when the ledger is made.
+    """
+
+    def __init__(self, sim):
+        from dda.recorder import pair_forces  # noqa: PLC0415 (the recorder imports much)
+
+        self._pair_forces = pair_forces
+        self.model = sim.model
+        self.known = ~self.model.free
+        self.work_known = 0.0
+        self.work_loads = 0.0
+        self.start = energy(self.model, sim.committed, free_only=True)
+        self._force = self._known_forces(sim.committed)
+        self._u = sim.committed.known_u.copy()
+        self._points = sim.committed.load_points.copy()
+        self.now = self.start
+
+    def _known_forces(self, state) -> np.ndarray:
+        """(n_blocks, 2) the contact force each known block pushes the free blocks with."""
+        keys, f, _ = self._pair_forces(self.model, state)
+        nb = self.model.n_blocks
+        lo, hi = keys // nb, keys % nb
+        out = np.zeros((nb, 2))
+        m = self.known[lo] & ~self.known[hi]  # f: the force on the higher-index block
+        np.add.at(out, lo[m], f[m])
+        m = self.known[hi] & ~self.known[lo]
+        np.add.at(out, hi[m], -f[m])
+        return out
+
+    def __call__(self, state, report=None) -> None:
+        model = self.model
+        force, u = self._known_forces(state), state.known_u
+        self.work_known += float(np.sum(0.5 * (force + self._force) * (u - self._u)))
+        self._force, self._u = force, u.copy()
+        if len(model.load_block):
+            loads = model.load_constant.copy()
+            for i, history in model.load_varying:
+                loads[i] = history(state.time)
+            self.work_loads += float(np.sum(loads * (state.load_points - self._points)))
+            self._points = state.load_points.copy()
+        self.now = energy(model, state, free_only=True)
+
+    def dissipated(self) -> float:
+        """``D = W_known + W_loads - (E_free(now) - E_free(start))`` (J/m)."""
+        return self.work_known + self.work_loads - (self.now.total - self.start.total)

@@ -9,7 +9,7 @@ import numpy as np
 from dda import geometry
 from dda.contact.detection import bounding_boxes, broad_phase
 from dda.contact.penetration import released_depth, untracked_depth, vertex_penetrations
-from dda.recorder import pair_forces
+from dda.energy import WorkLedger, energy
 from dda.step import deepest_spring
 
 
@@ -139,45 +139,23 @@ def assert_tracked(w: Watched):
 class KnownMotionWork:
     """Work put into the free blocks by the blocks whose motion is known (shaken, moved).
 
-    Per step (trapezoidal in time): the contact force each known block pushes the free
-    blocks with, dotted with its displacement; plus the change of the known blocks' own
-    kinetic and potential energy, which ``sim.energy()`` counts but nothing inside the scene
-    pays for. ``watch(sim, T, work=KnownMotionWork(sim), chunk=1)`` then checks that the
-    energy never rises above the start plus this work.
+    :class:`dda.energy.WorkLedger`'s ``work_known`` (the contact force each known block
+    pushes the free blocks with, trapezoidal over each step, dotted with its displacement),
+    plus the change of the known blocks' own kinetic and potential energy, which
+    ``sim.energy()`` counts but nothing inside the scene pays for. ``watch(sim, T,
+    work=KnownMotionWork(sim), chunk=1)`` then checks that the energy never rises above the
+    start plus this work.
     """
 
     def __init__(self, sim):
-        self.known = ~sim.model.free
-        self.done = 0.0
-        self.force = self._force(sim)
-        self.u = sim.state.known_u.copy()
+        self.ledger = WorkLedger(sim)
         self.own0 = self._own_energy(sim)
 
-    def _force(self, sim):
-        """(n_blocks, 2) force each known block exerts on the free blocks it touches."""
-        # f: force on the higher-index block of each pair
-        keys, f, _ = pair_forces(sim.model, sim.committed)
-        nb = sim.model.n_blocks
-        lo, hi = keys // nb, keys % nb
-        out = np.zeros((nb, 2))
-        m = self.known[lo] & ~self.known[hi]
-        np.add.at(out, lo[m], f[m])
-        m = self.known[hi] & ~self.known[lo]
-        np.add.at(out, hi[m], -f[m])
-        return out
-
-    def _own_energy(self, sim):
-        st = sim.state
-        ints = geometry.polygon_integrals(st.x, sim.model.offsets)
-        mass = geometry.mass_matrices(ints, sim.model.density)
-        v = np.where(self.known[:, None], st.velocity, 0.0)
-        g = sim.scene.gravity or 0.0
-        return (0.5 * float(np.einsum("bi,bij,bj->", v, mass, v))
-                + float(np.sum(self.known * g * sim.model.density * ints.area
-                               * ints.centroid[:, 1])))
+    @staticmethod
+    def _own_energy(sim):
+        """The known blocks' own energy: all of it less the free blocks'."""
+        return sim.energy().total - energy(sim, free_only=True).total
 
     def __call__(self, sim) -> float:
-        force, u = self._force(sim), sim.state.known_u.copy()
-        self.done += float(np.sum(0.5 * (force + self.force) * (u - self.u)))
-        self.force, self.u = force, u
-        return self.done + self._own_energy(sim) - self.own0
+        self.ledger(sim.committed)
+        return self.ledger.work_known + self._own_energy(sim) - self.own0
