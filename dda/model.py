@@ -175,6 +175,10 @@ class Model:
         self.min_size = float(np.min(self.size))
         self.min_thickness = float(np.min(self.thickness))
         self.density = np.array([b.material.density for b in blocks])
+        # the blocks' stresses at t = 0 (Scene.add_block's stress; a checkpoint's scene from
+        # before it has none)
+        self.stress_initial = np.array([getattr(b, "stress", np.zeros(3)) for b in blocks],
+                                       dtype=float).reshape(-1, 3)
         self.elasticity = np.stack([b.material.elasticity() for b in blocks])
         young = np.array([b.material.young for b in blocks])
         self.young = young

@@ -43,6 +43,19 @@ class Block:
         return f"block {self.name!r}"
 
 
+def _stress_vector(value, where: str) -> np.ndarray:
+    """``(sxx, syy, sxy)`` as a checked float array (Pa)."""
+    try:
+        sigma = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        sigma = None
+    if sigma is None or sigma.shape != (3,):
+        raise ValueError(f"{where}: stress must be (sxx, syy, sxy) in Pa, got {value!r}")
+    for name, v in zip(("sxx", "syy", "sxy"), value, strict=True):
+        finite_number(f"stress {name}", v, where=where)
+    return sigma
+
+
 @dataclass
 class _BlockInput:
     vertices: np.ndarray
@@ -51,6 +64,7 @@ class _BlockInput:
     velocity: np.ndarray
     angular_velocity: float
     rigid: bool = False
+    stress: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
 
 @dataclass
@@ -185,6 +199,7 @@ class Scene:
         velocity=(0.0, 0.0),
         angular_velocity: float = 0.0,
         rigid: bool = False,
+        stress=None,
     ) -> Block:
         """Add a polygonal block.
 
@@ -206,6 +221,12 @@ class Scene:
             A rigid block moves with 3 unknowns (translation and rotation) instead of 6: it
             does not strain and carries no stress. Worth it for blocks much stiffer than
             their joints, where the strain is tiny and costs unknowns.
+        stress : (sxx, syy, sxy), optional
+            Initial stress (Pa, tension positive: an in-situ compression is negative), the
+            block's stress at t = 0 (METHOD.md section 1: the load ``-A [sxx, syy, sxy]`` on
+            its strain unknowns at every step, as any stress it carries). Its contacts start
+            unloaded, so a stressed block pushes its neighbours until the contacts carry the
+            stress (:meth:`set_initial_stress` for a whole rock mass).
         """
         index = len(self._blocks)
         if index >= self.max_blocks:
@@ -260,11 +281,17 @@ class Scene:
         omega = finite_number("angular_velocity", angular_velocity, where=where)
         if not isinstance(rigid, (bool, np.bool_)):
             raise TypeError(f"{where}: rigid must be True or False, got {rigid!r}")
+        sigma = (np.zeros(3) if stress is None
+                 else _stress_vector(stress, where))
+        if rigid and np.any(sigma != 0.0):
+            raise ValueError(f"{where}: a rigid block carries no stress (it has no strain "
+                             "unknowns); give the stress to a block that is not rigid")
         if fixed and (np.any(vel != 0.0) or omega != 0.0):
             warnings.warn(f"{where}: the block is fixed, so its initial velocity is ignored "
                           "(a moving support: Scene.prescribe_motion or Scene.shake)",
                           PlausibilityWarning, stacklevel=2)
-        self._blocks.append(_BlockInput(v, material, bool(fixed), vel, omega, bool(rigid)))
+        self._blocks.append(_BlockInput(v, material, bool(fixed), vel, omega, bool(rigid),
+                                        sigma))
         handle = Block(index, name)
         self._handles.append(handle)
         names[name] = index
@@ -513,6 +540,41 @@ class Scene:
                 raise TypeError("set_damping: blocks must be a list of blocks, names or "
                                 f"indices, got {blocks!r}") from None
         self._damping.append(_Damping(chosen, a, b))
+
+    def set_initial_stress(self, stress, blocks=None) -> None:
+        """Give blocks an initial stress (an in-situ stress field).
+
+        Parameters
+        ----------
+        stress : (sxx, syy, sxy) or callable
+            Pa, tension positive (an in-situ compression is negative); a callable
+            ``(x, y) -> (sxx, syy, sxy)`` is taken at each block's centroid, e.g. a vertical
+            stress growing with depth, ``lambda x, y: (-k0 * rho * g * (h - y), -rho * g *
+            (h - y), 0.0)``.
+        blocks : list of Block, names or indices, optional
+            Default: every block that is neither rigid nor fixed (a fixed block has no
+            unknowns for its stress to act on; a rigid one carries none).
+
+        The contacts start unloaded: in a dynamic run the stressed blocks push each other
+        until their joints carry the stress, so settle the scene first (a static analysis,
+        ``analysis="static"``) before the run that asks the question.
+        """
+        if blocks is None:
+            chosen = [i for i, b in enumerate(self._blocks) if not (b.rigid or b.fixed)]
+        else:
+            chosen = [self.block(b).index for b in blocks]
+        if not chosen:
+            return
+        ints = geometry.polygon_integrals(*self.vertex_arrays())
+        for i in chosen:
+            b, where = self._blocks[i], f"block {self._handles[i].name!r}"
+            value = (stress(*(float(c) for c in ints.centroid[i])) if callable(stress)
+                     else stress)
+            sigma = _stress_vector(value, where)
+            if b.rigid and np.any(sigma != 0.0):
+                raise ValueError(f"{where}: a rigid block carries no stress (it has no strain "
+                                 "unknowns)")
+            b.stress = sigma
 
     def set_water_table(self, table, unit_weight: float = 9810.0) -> None:
         """Water in the joints below a water table (:mod:`dda.water`).

@@ -151,7 +151,7 @@ class StepState:
             bolts = {"bolt_points": model.bolts.points.copy(),
                      "bolt_broken": np.zeros(len(model.bolts), dtype=bool)}
         return cls(time=0.0, x=model.x_initial.copy(), velocity=model.initial_velocity(),
-                   stress=np.zeros((nb, 3)), rotation=np.zeros(nb),
+                   stress=model.stress_initial.copy(), rotation=np.zeros(nb),
                    centroid=model.centroid_initial.copy(), contacts=model.initial_contacts(),
                    load_points=model.load_initial.copy(),
                    spring_points=model.spring_initial.copy(), known_u=np.zeros((nb, 2)),

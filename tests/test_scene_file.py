@@ -366,7 +366,8 @@ def test_the_file_format_covers_every_api_setting():
                      "shake": "scene.shake", "prescribe_motion": "scene.prescribe_motion",
                      "add_point_load": "scene.add_point_load",
                      "set_damping": "scene.set_damping",
-                     "set_water_table": "scene.set_water_table", "add_bolt": "scene.add_bolt"}
+                     "set_water_table": "scene.set_water_table", "add_bolt": "scene.add_bolt",
+                     "set_initial_stress": "scene.set_initial_stress"}
     public = {n for n, v in vars(dda.Scene).items() if callable(v) and not n.startswith("_")}
     readers = {"block", "joint_for", "validate", "vertex_arrays", "damping_coefficients"}
     assert public - readers == set(scene_methods), "a new Scene method needs a table"

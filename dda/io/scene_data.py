@@ -370,6 +370,9 @@ def scene_to_data(scene, store: ArrayStore) -> dict:
             "block": int(ld.block), "point": [float(v) for v in ld.point],
             "force": ([float(v) for v in force.value] if force.constant
                       else _history_to_data(force.function, store, f"scene/load{k}", where))})
+    stress = np.array([b.stress for b in blocks], dtype=float).reshape(-1, 3)
+    if np.any(stress != 0.0):  # (only then: a scene without one reads as before)
+        data["blocks"]["stress"] = store.put("scene/stress", stress)
     return data
 
 
@@ -389,7 +392,7 @@ def scene_from_data(data, store: ArrayStore):
                      for i, m in enumerate(_list(data["materials"], "scene.materials"))]
         b = _table(data["blocks"], "scene.blocks",
                    {"names", "material", "fixed", "rigid", "vertices", "offsets", "velocity",
-                    "angular_velocity"},
+                    "angular_velocity", "stress"},
                    {"names", "material", "fixed", "rigid", "vertices", "offsets", "velocity",
                     "angular_velocity"})
         names = _list(b["names"], "scene.blocks.names")
@@ -401,6 +404,8 @@ def scene_from_data(data, store: ArrayStore):
             raise SceneDataError("scene.blocks.offsets: not the offsets of the vertices")
         velocity = store.get(b["velocity"], "scene.blocks.velocity", shape=(n, 2))
         omega = store.get(b["angular_velocity"], "scene.blocks.angular_velocity", shape=(n,))
+        stress = (store.get(b["stress"], "scene.blocks.stress", shape=(n, 3)) if "stress" in b
+                  else np.zeros((n, 3)))
         columns = [_list(b[k], f"scene.blocks.{k}") for k in ("material", "fixed", "rigid")]
         if any(len(c) != n for c in columns):
             raise SceneDataError("scene.blocks: its lists differ in length")
@@ -414,7 +419,8 @@ def scene_from_data(data, store: ArrayStore):
                 raise SceneDataError(f"scene.blocks.names[{i}]: not a name")
             scene.add_block(verts[offsets[i]:offsets[i + 1]], materials[m],
                             fixed=columns[1][i], name=names[i], velocity=velocity[i],
-                            angular_velocity=float(omega[i]), rigid=columns[2][i])
+                            angular_velocity=float(omega[i]), rigid=columns[2][i],
+                            stress=stress[i] if np.any(stress[i] != 0.0) else None)
         joints = _table(data["joints"], "scene.joints", {"default", "pairs"},
                         {"default", "pairs"})
         if joints["default"] is not None:

@@ -41,7 +41,8 @@ The format (every table may be left out but ``[simulation]`` with its ``dt``, so
     name = "base"
     material = "rock"
     vertices = [[0, 0], [4, 0], [4, 1], [0, 1]]
-    fixed = true                          # also: rigid, velocity, angular_velocity
+    fixed = true                          # also: rigid, velocity, angular_velocity,
+                                          # stress = [sxx, syy, sxy] (Pa, tension +)
 
     [[cut]]                               # blocks cut from a domain by joint sets
     name = "rock"                         # blocks rock0, rock1, ... (bottom to top)
@@ -53,6 +54,11 @@ The format (every table may be left out but ``[simulation]`` with its ``dt``, so
                   { dip = -60, spacing = 0.7, persistence = 0.8, trace_length = 2.0 }]
     # openings = [[[1.8, 1.8], [2.2, 1.8], [2.2, 2.2], [1.8, 2.2]]]  # excavations taken
                                           # out before the cut (outlines of [x, y])
+
+    [initial_stress]                      # optional: an in-situ stress (Pa, tension +)
+    stress = [0, 0, 0]                    # at top, and per metre below it:
+    per_depth = [-13000, -26000, 0]       # sxx, syy, sxy (k0 = 0.5, 2,650 kg/m^3)
+    top = 3.0                             # blocks = ["rock0", ...] (default: all free ones)
 
     [[shake]]                             # a sine, a table, or a record file
     block = "base"
@@ -555,8 +561,8 @@ class LoadedScene:
 
 
 #: the tables of a scene file, in the order they are read
-_TABLES = ("scene", "materials", "blocks", "cut", "joints", "shake", "prescribe", "load",
-           "bolt", "damping", "water", "simulation", "output")
+_TABLES = ("scene", "materials", "blocks", "cut", "initial_stress", "joints", "shake",
+           "prescribe", "load", "bolt", "damping", "water", "simulation", "output")
 
 
 def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
@@ -604,10 +610,12 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     # Simulation and Simulation.run: their keys are listed here, where a test checks that
     # every setting of the API has one
     blocks = _read_blocks(r, data, materials, scene.add_block, keys={
-        "name", "material", "vertices", "fixed", "rigid", "velocity", "angular_velocity"})
+        "name", "material", "vertices", "fixed", "rigid", "velocity", "angular_velocity",
+        "stress"})
     blocks.update(_read_cuts(r, data, materials, scene.add_block))
     if not blocks:
         raise r.error((), "no blocks: add [[blocks]] or [[cut]] tables")
+    _read_initial_stress(r, data, blocks, scene.set_initial_stress)
     _read_joints(r, data, blocks, scene.set_joint, path.parent)
     effects += _read_shaking(r, data, blocks, scene.shake, path.parent)
     effects += _read_motions(r, data, blocks, scene.prescribe_motion)
@@ -728,11 +736,51 @@ def _read_blocks(r, data, materials, add_block, keys) -> dict:
         kwargs = {"fixed": _bool(r, b, p, "fixed"), "rigid": _bool(r, b, p, "rigid"),
                   "velocity": r.pair(b, p, "velocity", (0.0, 0.0)),
                   "angular_velocity": r.number(b, p, "angular_velocity", default=0.0)}
+        if "stress" in b:
+            kwargs["stress"] = _stress(r, b, p)
         h = r.call(p, add_block, r.points(b, p, "vertices"), _material(r, materials, b, p),
                    name=b.get("name"), **kwargs)
         blocks[h.name] = h
         r.origin[h.name] = p
     return blocks
+
+
+def _stress(r, table, p) -> tuple:
+    """A table's ``stress = [sxx, syy, sxy]`` (Pa, tension positive)."""
+    v = table["stress"]
+    if (not isinstance(v, list) or len(v) != 3
+            or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
+        raise r.error((*p, "stress"), f"must be [sxx, syy, sxy] in Pa, got {v!r}")
+    return tuple(float(x) for x in v)
+
+
+def _read_initial_stress(r, data, blocks, set_initial_stress) -> None:
+    """``[initial_stress]``: ``stress = [sxx, syy, sxy]`` (Pa, tension positive) plus, with
+    ``per_depth = [a, b, c]`` (Pa/m) and ``top`` (m), ``per_depth x (top - y)`` at each
+    block's centroid (an in-situ field that grows with depth); on ``blocks`` (names), by
+    default every block that is neither fixed nor rigid (:meth:`dda.Scene.set_initial_stress`)."""
+    if "initial_stress" not in data:
+        return
+    p = ("initial_stress",)
+    t = r.table(data["initial_stress"], p, {"stress", "per_depth", "top", "blocks"})
+    base = np.array(_stress(r, t, p) if "stress" in t else (0.0, 0.0, 0.0))
+    if ("per_depth" in t) != ("top" in t):
+        raise r.error(p, "per_depth and top go together (the stress grows by per_depth "
+                         "for each metre below top)")
+    if "per_depth" in t:
+        grad = np.array(_stress(r, {"stress": t["per_depth"]}, (*p, "per_depth")))
+        top = r.number(t, p, "top")
+
+        def stress(x, y):
+            return tuple(base + grad * (top - y))
+    else:
+        stress = tuple(base)
+    chosen = None
+    if "blocks" in t:
+        if not isinstance(t["blocks"], list):
+            raise r.error((*p, "blocks"), "must be a list of block names")
+        chosen = [_block_of(r, blocks, {"block": n}, (*p, "blocks")) for n in t["blocks"]]
+    r.call(p, set_initial_stress, stress, chosen)
 
 
 def _read_cuts(r, data, materials, add_block) -> dict:
@@ -744,7 +792,8 @@ def _read_cuts(r, data, materials, add_block) -> dict:
     for i, c in enumerate(_array(r, data, "cut")):
         p = ("cut", i)
         r.table(c, p, {"name", "material", "domain", "joint_sets", "min_size", "seed",
-                       "fixed", "rigid", "openings"})
+                       "fixed", "rigid", "openings", "stress"})
+        stress = {"stress": _stress(r, c, p)} if "stress" in c else {}
         sets = _joint_sets(r, c, p)
         kwargs = {}
         if "openings" in c:
@@ -764,7 +813,7 @@ def _read_cuts(r, data, materials, add_block) -> dict:
         mat = _material(r, materials, c, p)
         for k, poly in enumerate(polys):
             h = r.call(p, add_block, poly, mat, name=f"{prefix}{k}",
-                       fixed=_bool(r, c, p, "fixed"), rigid=_bool(r, c, p, "rigid"))
+                       fixed=_bool(r, c, p, "fixed"), rigid=_bool(r, c, p, "rigid"), **stress)
             blocks[h.name] = h
             r.origin[h.name] = p
     return blocks
