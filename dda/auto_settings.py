@@ -242,6 +242,9 @@ MASS_STIFFNESS = 2.0
 #: how much of a shaking history (s) its frequency is measured over when the run's length
 #: is not known
 PROBE_SECONDS = 20.0
+#: the most samples a shaking history's frequency is measured from (a record sampled finer
+#: than its probe allows is read at PROBE_SECONDS / PROBE_SAMPLES)
+PROBE_SAMPLES = 1 << 20
 #: the share of the shaking's spectral energy below the frequency dt resolves
 ENERGY_SHARE = 0.99
 #: steps a period of the fastest bolt's vibration (rule 8): its peak force 1% low
@@ -276,7 +279,8 @@ def _samples(histories, duration: float | None):
     span = min(duration, PROBE_SECONDS) if duration else PROBE_SECONDS
     out = []
     for h in histories:
-        step = min(1e-3, h.typical_spacing)
+        # (and never more than PROBE_SAMPLES samples, whatever a record's spacing says)
+        step = max(min(1e-3, h.typical_spacing), span / PROBE_SAMPLES)
         t = np.arange(0.0, min(span, h.end_time), step)
         if len(t) >= 8:
             out.append((step, h.sample(t)))
@@ -548,6 +552,7 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
                          f"under {'gravity and the shaking' if a_max else 'gravity'}: "
                          f"{dt_move:.3g} s")
         dt = float(min(dt_shake, dt_move))
+        dt_springs = dt  # (the joints' springs are chosen for this step, not the bolts')
         if dynamic and model.bolts is not None:  # rule 8
             period, bolt = shortest_period(model)
             if period / BOLT_STEPS_PER_PERIOD < dt:
@@ -564,19 +569,24 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
         given = penalties[np.isfinite(penalties)]
         if given.size and float(given.max()) > kappa * 2.0 * m / dt**2:
             p_given = float(given.max())
-            dt = float(np.sqrt(kappa * 2.0 * m / p_given))
+            dt = dt_springs = float(np.sqrt(kappa * 2.0 * m / p_given))
             lines.append(f"dt: shortened to {dt:.3g} s to keep the joints' given normal "
                          f"penalty {p_given:.3g} N/m at {kappa:g} x Newmark's inertia 2 m / "
                          f"dt^2 of the lightest free block ({name}, {m:.3g} kg/m)")
         auto_dt = True
     else:
         auto_dt = False
+    if auto_dt is not True:
+        dt_springs = dt
     if not auto_penalty:
         if auto_dt == "static":
             dt = _static_cap(model, dt, np.asarray(model.joints.normal_penalty, dtype=float),
                              m, name, lines)
         return AutoChoice(dt, np.nan, np.nan, "\n".join(lines))
-    inertia = 2.0 * m / dt**2
+    # the penalty is kappa times the inertia at the step the joints need: a step shortened
+    # to resolve a bolt's vibration (rule 8) would make it 23 times stiffer for 23 times the
+    # steps (a bolted 0.2 m block: 2.1e11 N/m, 70 times its rock's E, under Newton)
+    inertia = 2.0 * m / dt_springs**2
     pn = kappa * inertia
     reason = (f"normal penalty: {kappa:g} x Newmark's inertia 2 m / dt^2 = {inertia:.3g} N/m "
               f"of the lightest free block ({name}, {m:.3g} kg/m): {pn:.3g} N/m")
@@ -608,7 +618,7 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
         reason = (f"normal penalty: {why}: {pn:.3g} N/m (joints softer than the rock soften "
                   f"the whole mass; {kappa:g} x the inertia 2 m / dt^2 of the lightest block "
                   f"would be {kappa * inertia:.3g} N/m)")
-    if auto_dt is True and pn > kappa * inertia:
+    if auto_dt is True and pn > kappa * inertia and np.sqrt(kappa * 2.0 * m / pn) < dt:
         dt = float(np.sqrt(kappa * 2.0 * m / pn))
         reason += f"; dt shortened to {dt:.3g} s to keep it at {kappa:g} x the inertia"
     lines.append(reason)

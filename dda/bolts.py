@@ -388,12 +388,16 @@ def shortest_period(model) -> tuple[float, str]:
 
         g^T M^{-1} g = 1 / m + ((p - c) \times n)^2 / I.
 
-    One bolt vibrates at ``omega^2 = k sum_(free ends) g^T M^{-1} g``; the bolts on one
-    free block together (each taken as anchored at its far end) at the largest eigenvalue of
-    ``M^{-1} sum k g g^T``. The period is ``2 pi / omega`` for the largest ``omega`` of
-    either kind. The blocks' strain unknowns are left out: their own elastic modes are the
-    rock's, far stiffer than a bolt. A bolt of zero length has no axis and is taken along
-    the direction that gives it the largest inverse mass.
+    One bolt vibrates at ``omega^2 = k sum_(free ends) g^T M^{-1} g``; the bolts on one free
+    block together at the largest eigenvalue of ``M^{-1} sum k (1 + w_o / w) g g^T``, ``w``
+    and ``w_o`` the bolt's inverse masses ``g^T M^{-1} g`` at this end and the other (0 for
+    a block whose motion is known): exact for bolts anchored in known blocks, for one bolt
+    or parallel bolts between two free blocks, and above the highest mode of a chain (4 k /
+    m for three equal blocks, whose highest is 3 k / m: a shorter period, more steps). The
+    period is ``2 pi / omega`` for the largest ``omega`` of either kind. The blocks' strain
+    unknowns are left out: their own elastic modes are the rock's, far stiffer than a bolt.
+    A bolt of zero length has no axis and is taken along the direction that gives it the
+    largest inverse mass.
 
     Parameters
     ----------
@@ -417,18 +421,23 @@ def shortest_period(model) -> tuple[float, str]:
     length = np.hypot(delta[:, 0], delta[:, 1])
     axis = length > 0.0
     n = np.where(axis[:, None], delta / np.where(axis, length, 1.0)[:, None], [1.0, 0.0])
-    inverse = np.zeros(len(table))
-    spring = np.zeros((model.n_blocks, 3, 3))
+    ends = np.zeros((len(table), 2))  # each end's inverse mass along the bolt
+    rows = []
     for end in (0, 1):  # the bolts' two ends, each over all bolts at once
         blk = table.blocks[:, end]
         arm = points[:, end] - ints.centroid[blk]
         cross = np.where(axis, arm[:, 0] * n[:, 1] - arm[:, 1] * n[:, 0],
                          np.hypot(arm[:, 0], arm[:, 1]))
-        g = np.column_stack([n, cross])
-        free = model.free[blk]
-        inverse += np.where(free, 1.0 / mass[blk] + cross**2 / polar[blk], 0.0)
-        np.add.at(spring, blk, table.stiffness[:, None, None] * g[:, :, None] * g[:, None, :])
-    per_bolt = table.stiffness * inverse
+        rows.append(np.column_stack([n, cross]))
+        ends[:, end] = np.where(model.free[blk], 1.0 / mass[blk] + cross**2 / polar[blk], 0.0)
+    per_bolt = table.stiffness * ends.sum(axis=1)
+    spring = np.zeros((model.n_blocks, 3, 3))
+    for end in (0, 1):
+        own, other = ends[:, end], ends[:, 1 - end]
+        scale = np.where(own > 0.0, 1.0 + other / np.where(own > 0.0, own, 1.0), 0.0)
+        g = rows[end]
+        np.add.at(spring, table.blocks[:, end],
+                  (table.stiffness * scale)[:, None, None] * g[:, :, None] * g[:, None, :])
     fastest = int(np.argmax(per_bolt))
     omega2, what = float(per_bolt[fastest]), table.labels[fastest]
     held = np.flatnonzero(model.free & (np.abs(spring).sum(axis=(1, 2)) > 0.0))

@@ -191,10 +191,14 @@ class AccelerationHistory:
 
     @property
     def typical_spacing(self) -> float:
-        """The median spacing of a record's samples (s), its sampling interval; inf for a
+        """A record's sampling interval, its length over its samples less one (s); inf for a
         callable. Unlike :attr:`min_spacing` it does not see a jump written as two samples
-        a hair apart."""
-        return np.inf if self._callable is not None else float(np.median(np.diff(self._times)))
+        a hair apart (nor does it, unlike their median, where every sample is such a pair:
+        a square wave's)."""
+        if self._callable is not None:
+            return np.inf
+        t = self._times
+        return float((t[-1] - t[0]) / (len(t) - 1))
 
     def sample(self, t: np.ndarray) -> np.ndarray:
         """(n, 2) acceleration at the times ``t`` (a record: linear between its samples)."""

@@ -178,6 +178,8 @@ SHAKING_STEPS_SHARE = 1.0 / 20.0
 #: a given penalty whose contact frequency, sqrt(p / m) / (2 pi) of the heaviest free block
 #: on the softest joint, is below this multiple of the shaking's frequency gets a warning
 SHAKING_CONTACT_RATIO = 3.0
+#: a callable shaking is measured over its first this many seconds for these warnings
+CALLABLE_PROBE = 2.0
 
 
 def check_shaking_resolution(model, dt: float, solver, shakes, dt_given: bool,
@@ -202,9 +204,16 @@ def check_shaking_resolution(model, dt: float, solver, shakes, dt_given: bool,
 
     if not shakes or not model.free.any() or not (dt_given or penalty_given):
         return
-    f = shaking_frequency(shakes)
-    if f is None:
+    # a record is sampled cheaply; a Python callable over PROBE_SECONDS is 20,000 calls
+    # (33.7 s at 1 ms a call), so callables are measured over their first CALLABLE_PROBE s
+    recorded = [h for h in shakes if h.function is None]
+    called = [h for h in shakes if h.function is not None]
+    found = [x for x in (shaking_frequency(recorded) if recorded else None,
+                         shaking_frequency(called, duration=CALLABLE_PROBE) if called
+                         else None) if x is not None]
+    if not found:
         return
+    f = max(found)
     if dt_given:
         auto = int(getattr(solver, "auto_steps_per_period", 300))
         steps = 1.0 / (dt * f)
@@ -217,22 +226,49 @@ def check_shaking_resolution(model, dt: float, solver, shakes, dt_given: bool,
                   f"dt at most {1.0 / (SHAKING_STEPS_SHARE * auto * f):.3g} s, or dt='auto'",
                   stacklevel=4)
     if penalty_given:
-        penalties = np.asarray(model.joints.normal_penalty, dtype=float)
-        finite = penalties[np.isfinite(penalties)]
-        if not finite.size:
+        worst = _softest_contact(model)
+        if worst is None:
             return
-        mass = model.density * model.size ** 2
-        heavy = int(np.flatnonzero(model.free)[np.argmax(mass[model.free])])
-        p = float(finite.min())
-        contact = math.sqrt(p / mass[heavy]) / (2.0 * math.pi)
+        contact, p, m, block = worst
         if contact < SHAKING_CONTACT_RATIO * f:
-            _warn(f"Simulation: a penalty of {p:g} N/m lets {model.block_label(heavy)} "
-                  f"({mass[heavy]:.3g} kg/m) ride the shaking on its springs: its contact "
+            _warn(f"Simulation: a penalty of {p:g} N/m lets {model.block_label(block)} "
+                  f"({m:.3g} kg/m on it) ride the shaking on its springs: its contact "
                   f"frequency, {contact:.3g} Hz, is within {SHAKING_CONTACT_RATIO:g} times the "
                   f"shaking's {f:.3g} Hz (below which 99% of its spectral energy lies), and "
                   "a block's slip errs by percents (at 1.7 times: 5%); take at least "
-                  f"{(2 * math.pi * SHAKING_CONTACT_RATIO * f) ** 2 * mass[heavy]:.3g} N/m, or "
+                  f"{(2 * math.pi * SHAKING_CONTACT_RATIO * f) ** 2 * m:.3g} N/m, or "
                   '"auto"', stacklevel=4)
+
+
+def _softest_contact(model):
+    """``(frequency, penalty, mass, block)`` of the lowest contact frequency ``sqrt(p / m) /
+    (2 pi)`` among the scene's given joints, or None: a joint of one pair with the pair's
+    reduced mass (a block whose motion is known counts as infinitely heavy), the default
+    joint with the heaviest free block."""
+    joints = model.joints
+    penalties = np.asarray(joints.normal_penalty, dtype=float)
+    mass = model.density * model.size ** 2
+    free_mass = np.where(model.free, mass, np.inf)
+    nb = model.n_blocks
+    cands = []
+    keys = np.asarray(joints.pair_keys, dtype=np.int64)
+    if len(keys):
+        a, b = keys // nb, keys % nb
+        p = penalties[np.asarray(joints.pair_joint, dtype=np.int64)]
+        ma, mb = free_mass[a], free_mass[b]
+        both = np.isfinite(ma) & np.isfinite(mb)
+        m = np.where(both, ma * mb / np.where(both, ma + mb, 1.0), np.minimum(ma, mb))
+        ok = np.isfinite(p) & np.isfinite(m)
+        for i in np.flatnonzero(ok):  # one per joint given for a pair: a handful
+            light = int(a[i]) if ma[i] <= mb[i] else int(b[i])
+            cands.append((math.sqrt(p[i] / m[i]) / (2 * math.pi), float(p[i]), float(m[i]),
+                          light))
+    if joints.default >= 0 and np.isfinite(penalties[joints.default]):
+        heavy = int(np.flatnonzero(model.free)[np.argmax(mass[model.free])])
+        p = float(penalties[joints.default])
+        cands.append((math.sqrt(p / mass[heavy]) / (2 * math.pi), p, float(mass[heavy]),
+                      heavy))
+    return min(cands) if cands else None
 
 
 def check_rate_laws_static(laws, dt: float) -> None:

@@ -508,3 +508,20 @@ def test_a_static_auto_step_is_capped_by_a_stiff_given_penalty():
     sim = dda.Simulation(scene, dt="auto", analysis="static")
     assert sim.dt == pytest.approx(50 * 2 * np.pi * np.sqrt(2500.0 / 1e12), rel=1e-12)
     assert "capped at 50 contact periods" in sim.choices
+
+
+def test_a_square_wave_of_jump_pairs_is_probed_at_its_sampling_interval():
+    """Every switch written as two samples 1e-9 s apart: their median spacing is the hair,
+    and probing at it asked for 73.8 GiB, even with a given dt (a review of the fix that
+    took the median)."""
+    switch = np.arange(0.0, 10.0, 0.1)
+    t = np.sort(np.concatenate([switch, switch + 1e-9]))
+    level = np.where(np.arange(len(t)) % 4 < 2, -1.0, 1.0)
+    level[0] = 0.0
+    history = AccelerationHistory(0.3 * G * level, t)
+    assert history.typical_spacing == pytest.approx(9.9 / 199, rel=1e-6)  # not 1e-9
+    f = shaking_frequency([history])
+    assert f is not None and 5.0 < f < 100.0  # a 5 Hz square wave's harmonics
+    scene = column(1, shake=(t, np.column_stack([0.3 * G * level, 0 * t])))
+    dda.Simulation(scene, dt=1e-3)
+    dda.Simulation(scene, dt="auto")

@@ -208,6 +208,12 @@ fixed = true
     out = capsys.readouterr().out
     assert "for each of 6 VTU frames" in out
     assert "contacts   2 vertex-edge pairs touching at the start (1 block pair)" in out
+    # an interval shorter than the step: a frame a step (it counted ten a step), and one
+    # that is not a whole number of steps: each frame at the first step past the interval
+    for interval, frames in (("0.0002", 51), ("0.005", 17)):
+        scene.write_text(text.replace("interval = 0.02", f"interval = {interval}"))
+        assert main(["info", str(scene)]) == 0
+        assert f"for each of {frames} VTU frames" in capsys.readouterr().out
 
 
 def test_info_refuses_a_record_that_ends_before_the_run(tmp_path, capsys):

@@ -158,3 +158,42 @@ def test_a_penalty_that_rides_the_shaking_is_warned_of():
     assert len(got) == 1 and "a penalty of 1e+07 N/m lets block 'block'" in got[0], got
     assert "contact frequency, 14.2 Hz, is within 3 times the shaking's 10 Hz" in got[0]
     assert caught(lambda: dda.Simulation(_shaken_block(4e8), dt=1e-3))[0] == []
+
+
+def test_the_shaking_check_calls_a_python_shaking_a_few_thousand_times_at_most():
+    """It sampled a callable over 20 s at 1 kHz: 20,000 calls, 33.7 s at 1 ms a call."""
+    calls = []
+
+    def table(t):
+        calls.append(t)
+        return (3.0 * np.sin(2 * np.pi * 10.0 * t), 0.0)
+
+    scene = _shaken_block(1e9)
+    scene._shakes.clear()
+    scene.shake("table", acceleration=table)
+    calls.clear()
+    dda.Simulation(scene, dt=1e-3)
+    assert 0 < len(calls) <= 2100
+
+
+def test_a_soft_joint_between_two_blocks_is_judged_on_their_reduced_mass():
+    """A 1e6 N/m pad under a 0.1 m block (25 kg/m) on a 2 m block that rests on 1e10 N/m:
+    the pad's frequency is the small block's, 32 Hz, above 3 x 2 Hz; it was judged with the
+    2 m block's 10 t (1.6 Hz) and the 2 m block told to take 1.4e7 N/m. On a 10 Hz table the
+    small block does ride its pad, and is named."""
+    def scene(freq):
+        s = dda.Scene(gravity=9.81)
+        table = s.add_block(box(-2, -1, 6, 1), ROCK_10, fixed=True, name="table")
+        big = s.add_block(box(0, 0, 2, 2), ROCK_10, name="big")
+        small = s.add_block(box(0.9, 2, 0.1, 0.1), ROCK_10, name="small")
+        s.set_joint(JointMaterial(1e10, 1e10, CoulombSingle(phi=35.0)))
+        s.set_joint(JointMaterial(1e6, 1e6, CoulombSingle(phi=35.0)), between=(big, small))
+        s.shake(table, acceleration=lambda t: (2.0 * np.sin(2 * np.pi * freq * t), 0.0))
+        return s
+
+    assert caught(lambda: dda.Simulation(scene(2.0), dt=1e-3))[0] == []
+    got, _ = caught(lambda: dda.Simulation(scene(12.0), dt=1e-3))
+    assert len(got) == 1 and "lets block 'small'" in got[0], got
+
+
+ROCK_10 = LinearElastic(young=1e10, poisson=0.2, density=2500.0)

@@ -290,10 +290,17 @@ def test_on_common_times_takes_times_a_bit_apart_as_one():
     np.testing.assert_array_equal(t, ta)  # every 100 Hz time is a 200 Hz one
     np.testing.assert_allclose(b[::2], vb, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(a, va)
-    # a record's own jump, two samples a hair apart, is kept
-    tj = np.array([0.0, 1.0, 1.0 + 1e-12, 5.0])
-    t, a, _ = on_common_times(tj, np.array([0.0, 0.0, 2.0, 2.0]), ta, va)
+    # a record's own jump, two samples a hair apart, is kept, first record or second (the
+    # second's was a 10 ms ramp where the first also samples the jump's time)
+    tj, vj = np.array([0.0, 1.0, 1.0 + 1e-12, 5.0]), np.array([0.0, 0.0, 2.0, 2.0])
+    t, a, _ = on_common_times(tj, vj, ta, va)
     assert 1.0 in t and 1.0 + 1e-12 in t
+    t, _, b = on_common_times(ta, va, tj, vj)
+    np.testing.assert_array_equal(b[np.isin(t, tj)], vj)
+    # one sample of the first in the time both cover (an IndexError)
+    t, a, b = on_common_times([0.0, 1.0, 2.0], [0.0, 1.0, 2.0], [0.0, 0.5], [1.0, 3.0])
+    np.testing.assert_array_equal(t, [0.0, 0.5])
+    np.testing.assert_array_equal(a, [0.0, 0.5])
 
 
 # ---------------------------------------------------------------------- scene files
@@ -334,6 +341,12 @@ def test_scene_file_knet_horizontal_with_a_vertical_record(tmp_path):
         loaded = scene_with(tmp_path, 'file = "MYG004.EW"\nvertical = "MYG004.UD"\n'
                                       'scale = 0.5\nbaseline = "mean"')
     t, a = recorded(loaded)
+    # records that end a sample of the coarser one apart cover the same time: nothing said
+    put(tmp_path, "SHORT.UD", knet_text(counts_ud[:6], freq=50, direction="U-D"))
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        scene_with(tmp_path, 'file = "MYG004.EW"\nvertical = "SHORT.UD"', "short.toml")
+    assert not [w for w in got if "ends at" in str(w.message)]
     ew = read_knet(tmp_path / "MYG004.EW", baseline="mean")
     ud = read_knet(tmp_path / "MYG004.UD", baseline="mean")
     # 100 Hz and 50 Hz: the union of their samples over the time both cover (0.11 s)

@@ -237,13 +237,21 @@ def baseline_correct(times, acceleration, method: str = "quadratic") -> np.ndarr
     return a - (q @ c).reshape(a.shape)
 
 
+def _sampling_interval(times) -> float:
+    """A record's sampling interval: its length over its samples less one (a jump written
+    as two samples a hair apart does not make it a hair); inf for fewer than 2."""
+    times = np.asarray(times, dtype=float)
+    return float((times[-1] - times[0]) / (len(times) - 1)) if len(times) > 1 else np.inf
+
+
 def on_common_times(times_a, values_a, times_b, values_b):
     """Two records sampled at different times, both at the union of their sample times.
 
     Each is piecewise linear, so at the union of their samples both are exact; the result
     covers the time both cover (it ends with the shorter record). A time of ``times_b``
-    within ``1e-9`` of the finer sampling interval of one of ``times_a`` is taken as that
-    time: 0.005 k and k / 100 differ in the last bit at every other shared instant, and the
+    within ``1e-9`` of the finer sampling interval (a record's length over its samples) of
+    one of ``times_a`` is taken as that time, unless it is one of a jump's two samples in
+    ``times_b``: 0.005 k and k / 100 differ in the last bit at every other shared instant, and the
     union's spacings of 5.6e-17 s were no sampling (the automatic dt measured the shaking at
     them).
 
@@ -262,11 +270,19 @@ def on_common_times(times_a, values_a, times_b, values_b):
         return ta, va.copy(), vb.copy()
     end = min(ta[-1], tb[-1])
     ta_in, tb_in = ta[ta <= end], tb[tb <= end]
-    spacing = min(float(np.median(np.diff(ts))) if len(ts) > 1 else np.inf for ts in (ta, tb))
-    if np.isfinite(spacing) and len(ta_in):
-        at_a = np.clip(np.searchsorted(ta_in, tb_in), 1, max(len(ta_in) - 1, 1))
-        near = np.minimum(np.abs(tb_in - ta_in[at_a - 1]), np.abs(tb_in - ta_in[at_a]))
-        tb_in = tb_in[near > 1e-9 * spacing]
+    spacing = min(_sampling_interval(ts) for ts in (ta, tb))
+    if np.isfinite(spacing) and len(ta_in) and len(tb_in):
+        tol = 1e-9 * spacing
+        at = np.searchsorted(ta_in, tb_in)
+        left = ta_in[np.clip(at - 1, 0, len(ta_in) - 1)]
+        right = ta_in[np.clip(at, 0, len(ta_in) - 1)]
+        near = np.minimum(np.abs(tb_in - left), np.abs(tb_in - right)) <= tol
+        # ... but the two samples of a jump of b's own stay (b's value jumps there)
+        gaps = np.diff(tb_in)
+        jump = np.zeros(len(tb_in), dtype=bool)
+        jump[1:] |= gaps <= tol
+        jump[:-1] |= gaps <= tol
+        tb_in = tb_in[~near | jump]
     t = np.union1d(ta_in, tb_in)
 
     def at(ts, v):

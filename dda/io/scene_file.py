@@ -967,7 +967,8 @@ def _shake_file(r, s, p, folder):
         if av.shape[1] != 1:
             raise r.error((*p, "vertical"), f"{s['vertical']} has two components: vertical "
                                             "takes a record of one")
-        if abs(tv[-1] - t[-1]) > 1e-9 * max(t[-1], tv[-1]):
+        coarser = max(records._sampling_interval(t), records._sampling_interval(tv))
+        if abs(tv[-1] - t[-1]) > coarser * (1.0 + 1e-9):  # (a sample's difference is none)
             # the shaking covers the time both cover: a run past it is refused, and that
             # message knows only the shaken block
             short, end, other = (("vertical", tv[-1], t[-1]) if tv[-1] < t[-1]
