@@ -160,6 +160,7 @@ def describe(loaded, budget: float = 2.0) -> str:
     every run pays), then as many as ``budget`` seconds allow, the run's own cost when that is
     all of them, and one VTU frame's write times the frames."""
     from dda.contact.detection import (
+        TOUCH_TOLERANCE,
         bounding_boxes,
         broad_phase,
         narrow_phase,
@@ -178,7 +179,8 @@ def describe(loaded, budget: float = 2.0) -> str:
     # blocks whose motion is known never get a contact between them (step._pairs)
     pairs = pairs_with_free_block(broad_phase(bounding_boxes(model.x_initial, model.offsets),
                                               1e-6 * size), model.free)
-    touch = narrow_phase(model.x_initial, model.topo, 1e-6 * size, 1e-6 * size, pairs)
+    touch = narrow_phase(model.x_initial, model.topo, 1e-6 * size, 1e-6 * size, pairs,
+                         touch=TOUCH_TOLERANCE)
     laws = ", ".join(sorted({type(law).__name__ for law in model.joints.laws}))
     lines = [
         f"scene      {loaded.path}",

@@ -34,6 +34,7 @@ from dda.contact.dashpot import (
     shear_dashpot_start,
 )
 from dda.contact.detection import (
+    TOUCH_TOLERANCE,
     CandidateContacts,
     bounding_boxes,
     broad_phase,
@@ -535,7 +536,9 @@ def _detect(model, state, d0, tolerance) -> _Detected:
             sunk = 0.25 * tolerance * model.thickness
             boxes = bounding_boxes(state.x, model.offsets)
             pairs = _pairs(model, boxes, max(d0, pen_limit))
-            cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk, boxes)
+            # blocks built touching (overlaps the scene accepts) touch at the first step
+            touch = TOUCH_TOLERANCE if state.time == 0.0 else 0.0
+            cand = narrow_phase(state.x, topo, d0, pen_limit, pairs, sunk, boxes, touch)
             closed = state.contacts.state != OPEN
             cand = keep_closed(cand, state.contacts.vertex[closed], state.contacts.edge[closed],
                                state.x, topo, d0, pen_limit, model.n_blocks, sunk)

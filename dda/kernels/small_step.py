@@ -108,7 +108,9 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         return (FALLBACK,) + _nothing(nb)
     (vertex, edge, bj, bk, p1, p2, p3, edge_length, tau, normal, gap,
      xi) = _narrow_phase_kernel(x, offsets, nxt, prv, block, pairs, boxes,
-                                max(d0, pen_limit), d0, pen_limit, sunk)
+                                max(d0, pen_limit), d0, pen_limit, sunk, 0.0)
+    # (no touching tolerance: it is a run's first step's, and a first step, with no
+    # committed contacts, falls back to dda.step below)
     m = vertex.shape[0]
     if m == 0 or m != m0:
         return (FALLBACK,) + _nothing(nb)
