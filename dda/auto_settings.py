@@ -138,17 +138,8 @@ says what it chose and why. The rule, and the measurements it comes from
    the cut slope of ``examples/jointed_slope.py`` (E 1e10 Pa) the face blocks' median motion
    after 0.3 s was 55 mm at 0.22 E (the first three rules' 2.2e9 N/m; 57 and 61 mm at dt
    3.6e-4 and 1.8e-4: not the step), 38 mm at 0.5 E, 31 mm at E, 29 mm at 2 E and 27 mm at
-   5 E. Under shaking a single block on its base does not depend on it (the moving base and
-   the rock slope, the rule's validation, get no floor). **Without shaking** the floor holds
-   wherever a free block rests on any block, a fixed base or a moved one included (its
-   centroid above the other's, the two overlapping in x): nothing but the fall then sets
-   the step, and its long step (1% of a half-width: 0.026 s for a 0.5 x 1 m block) gave a
-   spring of ``kappa`` times an inertia 30 to 50 times weaker than under shaking, 2.9e7 N/m
-   (0.003 E; legacy DDA 8.8e6). A block let go on a 21 degree plane (phi 20) rode the
-   springs' start-up bounce and slid 8.3% (Newton) and 11.6% (legacy DDA) farther in 1 s
-   than the rigid block's 91.1 mm, where at 2 E (dt 1e-3 and 5.5e-4 s) it slides 0.4% and
-   0.3% farther (a masonry review, 2026-12-07; at the old step with 1e9 N/m Newton was
-   exact, legacy 4.2% over). Newton's kappa of 10 gives it a step ``sqrt(10 /
+   5 E. A single block on its base does not depend on it (the moving base and the rock slope,
+   the rule's validation, get no floor). Newton's kappa of 10 gives it a step ``sqrt(10 /
    3)`` times legacy DDA's (4.3e-4 s against 2.4e-4 at 2e10 N/m): over 3 s of shaking on
    five cuts of the rock mass (``benchmarks/cut_rate.py --auto --seconds 3``) 2 of 34,242
    steps were cut, against none of 62,503 at kappa 3, in 914 s of CPU against 1,155, and the
@@ -352,27 +343,6 @@ def _block_loads(model, a_max: float) -> tuple[np.ndarray, np.ndarray]:
         np.add.at(load, model.load_block, np.hypot(*model.load_constant.T))
     factor = 1.0 + (a_max / g if g > 0.0 else 0.0)
     return 0.5 * load * factor, carries
-
-
-def _bears(model) -> np.ndarray:
-    """(n_blocks,) the blocks whose motion is known (fixed, moved) with a free block above
-    them (overlapping in x, its centroid higher): rule 4 without shaking."""
-    n = model.n_blocks
-    x = model.x_initial
-    blk = model.topo.block
-    x0 = np.full(n, np.inf)
-    x1 = np.full(n, -np.inf)
-    np.minimum.at(x0, blk, x[:, 0])
-    np.maximum.at(x1, blk, x[:, 0])
-    yc = model.centroid_initial[:, 1]
-    free = np.flatnonzero(model.free)
-    known = np.flatnonzero(~model.free)
-    bears = np.zeros(n, dtype=bool)
-    if len(free) and len(known):
-        i, j = known[:, None], free[None, :]
-        over = np.minimum(x1[i], x1[j]) - np.maximum(x0[i], x0[j])
-        bears[known] = ((over > 0.0) & (yc[j] > yc[i])).any(axis=1)
-    return bears
 
 
 def _load_floor(model, loads: np.ndarray, a_max: float) -> tuple[float, str]:
@@ -610,8 +580,6 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
                       f"half-width ({h[fast]:.3g} m): m v^2 / depth^2; {kappa:g} x the "
                       f"inertia 2 m / dt^2 of the lightest block would be "
                       f"{kappa * inertia:.3g} N/m")
-    if auto_dt is True and not samples:  # no shaking: the fall's long step (rule 4)
-        carries = carries | _bears(model)
     floor, why = _mass_floor(model, carries)
     if floor > pn:
         pn = floor
