@@ -205,8 +205,10 @@ def describe(loaded, budget: float = 2.0) -> str:
         # 'dda run' writes a VTU frame every [output] every steps, or one each [output]
         # interval of simulated time (a script's run: its writer's, or none): time one
         interval = getattr(loaded, "interval", None)
-        if interval:  # a frame at the first step at least interval after the last one
-            frames = steps // max(int(np.ceil(interval / sim.dt - 1e-9)), 1) + 1
+        if interval:  # a frame at the first step at least interval after the last one,
+            # and the run's last
+            every = max(int(np.ceil(interval / sim.dt - 1e-9)), 1)
+            frames = steps // every + 1 + (1 if steps % every else 0)
         else:
             frames = 0 if loaded.every is None else steps // max(loaded.every, 1) + 1
         per_frame = 0.0

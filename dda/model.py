@@ -176,7 +176,7 @@ class Model:
         self.min_thickness = float(np.min(self.thickness))
         self.density = np.array([b.material.density for b in blocks])
         # the blocks' stresses at t = 0 (Scene.add_block's stress; a checkpoint's scene from
-        # before it has none)
+        # before it has none); set below to 0 on the blocks whose motion is known
         self.stress_initial = np.array([getattr(b, "stress", np.zeros(3)) for b in blocks],
                                        dtype=float).reshape(-1, 3)
         self.elasticity = np.stack([b.material.elasticity() for b in blocks])
@@ -195,6 +195,9 @@ class Model:
             self.free[s.block] = False
         for m in self.full_motions:
             self.free[m.block] = False
+        # a block without unknowns has nothing for a stress to act on: it would only show in
+        # the output and in the strain energy
+        self.stress_initial[~self.free] = 0.0
         self.constraint_penalty = 100.0 * young.max()
         self.damping = scene.damping_coefficients()
         self.water = scene.water

@@ -178,8 +178,9 @@ SHAKING_STEPS_SHARE = 1.0 / 20.0
 #: a given penalty whose contact frequency, sqrt(p / m) / (2 pi) of the heaviest free block
 #: on the softest joint, is below this multiple of the shaking's frequency gets a warning
 SHAKING_CONTACT_RATIO = 3.0
-#: a callable shaking is measured over its first this many seconds for these warnings
-CALLABLE_PROBE = 2.0
+#: a callable shaking is sampled this often (s) for these warnings (4,000 calls over the
+#: auto rule's 20 s; its frequencies up to 100 Hz)
+CALLABLE_STEP = 5e-3
 
 
 def check_shaking_resolution(model, dt: float, solver, shakes, dt_given: bool,
@@ -200,17 +201,23 @@ def check_shaking_resolution(model, dt: float, solver, shakes, dt_given: bool,
       -26 / -12 / -5 / -1.8% (legacy DDA), while it sank at most 1.9% of its half-width, below
       the penalty advice's 5%.
     """
-    from dda.auto_settings import shaking_frequency  # noqa: PLC0415 (it imports this module)
+    from dda.auto_settings import (  # noqa: PLC0415 (it imports this module)
+        PROBE_SECONDS,
+        _frequency,
+        shaking_frequency,
+    )
 
     if not shakes or not model.free.any() or not (dt_given or penalty_given):
         return
-    # a record is sampled cheaply; a Python callable over PROBE_SECONDS is 20,000 calls
-    # (33.7 s at 1 ms a call), so callables are measured over their first CALLABLE_PROBE s
+    # a record is sampled cheaply; a Python callable at 1 kHz over PROBE_SECONDS is 20,000
+    # calls (33.7 s at 1 ms a call), so a callable is sampled every CALLABLE_STEP over them
+    # (over its first 2 s instead, a shaking that began at 3 s went unseen)
     recorded = [h for h in shakes if h.function is None]
     called = [h for h in shakes if h.function is not None]
+    t = np.arange(0.0, PROBE_SECONDS, CALLABLE_STEP)
     found = [x for x in (shaking_frequency(recorded) if recorded else None,
-                         shaking_frequency(called, duration=CALLABLE_PROBE) if called
-                         else None) if x is not None]
+                         _frequency([(CALLABLE_STEP, h.sample(t)) for h in called])
+                         if called else None) if x is not None]
     if not found:
         return
     f = max(found)

@@ -225,8 +225,9 @@ class Scene:
             Initial stress (Pa, tension positive: an in-situ compression is negative), the
             block's stress at t = 0 (METHOD.md section 1: the load ``-A [sxx, syy, sxy]`` on
             its strain unknowns at every step, as any stress it carries). Its contacts start
-            unloaded, so a stressed block pushes its neighbours until the contacts carry the
-            stress (:meth:`set_initial_stress` for a whole rock mass).
+            unloaded, so a stressed block pushes its neighbours until they carry it
+            (:meth:`set_initial_stress` for a whole rock mass). A block whose motion is known
+            (fixed, shaken, moved) has no unknowns for it to act on: its stress is dropped.
         """
         index = len(self._blocks)
         if index >= self.max_blocks:
@@ -552,12 +553,14 @@ class Scene:
             stress growing with depth, ``lambda x, y: (-k0 * rho * g * (h - y), -rho * g *
             (h - y), 0.0)``.
         blocks : list of Block, names or indices, optional
-            Default: every block that is neither rigid nor fixed (a fixed block has no
-            unknowns for its stress to act on; a rigid one carries none).
+            Default: every block that is neither rigid nor fixed (a rigid one carries no
+            stress; a block whose motion is known, fixed, shaken or moved, has no unknowns
+            for it to act on, and the simulation drops its stress). A later call replaces
+            an earlier one's (and ``add_block``'s) stress on the blocks it covers.
 
-        The contacts start unloaded: in a dynamic run the stressed blocks push each other
-        until their joints carry the stress, so settle the scene first (a static analysis,
-        ``analysis="static"``) before the run that asks the question.
+        The contacts start unloaded: the stressed blocks push each other until their joints
+        carry the stress (a static analysis, ``analysis="static"``, finds that state; a
+        dynamic run starts with the push: README, "A dynamic run's start").
         """
         if blocks is None:
             chosen = [i for i, b in enumerate(self._blocks) if not (b.rigid or b.fixed)]

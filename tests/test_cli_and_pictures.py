@@ -209,8 +209,9 @@ fixed = true
     assert "for each of 6 VTU frames" in out
     assert "contacts   2 vertex-edge pairs touching at the start (1 block pair)" in out
     # an interval shorter than the step: a frame a step (it counted ten a step), and one
-    # that is not a whole number of steps: each frame at the first step past the interval
-    for interval, frames in (("0.0002", 51), ("0.005", 17)):
+    # that is not a whole number of steps: each frame at the first step past the interval,
+    # and the last step's
+    for interval, frames in (("0.0002", 51), ("0.005", 18)):
         scene.write_text(text.replace("interval = 0.02", f"interval = {interval}"))
         assert main(["info", str(scene)]) == 0
         assert f"for each of {frames} VTU frames" in capsys.readouterr().out

@@ -67,8 +67,9 @@ def test_the_work_ledger_balances_a_block_sliding_on_a_shaken_table(solver):
     friction = np.tan(np.radians(30.0)) * 1250.0 * 9.81 * np.abs(np.diff(slip)).sum()
     assert ledger.work_loads == 0.0 and ledger.work_known > 1000.0
     assert ledger.dissipated() == pytest.approx(friction, rel=0.006)
-    # nothing comes out of nowhere (the trapezoid's round-off of the table's work: 2e-5 of it)
-    assert min(lost) > -1e-4 * ledger.work_known
+    # nothing comes out of nowhere (with the table's force averaged over each step instead
+    # of its end's, as the step applies it, D dipped to -2e-5 of the work)
+    assert min(lost) > -1e-9 * ledger.work_known
     # the free blocks' energy leaves the table out: its kinetic energy and weight
     whole, free = sim.energy(), energy(sim, free_only=True)
     block_v = sim.committed.velocity[1]

@@ -39,7 +39,8 @@ def test_a_free_block_relaxes_its_stress_into_strain(solver):
 def test_a_block_between_walls_keeps_its_stress_but_the_springs_give(solver):
     """sxx_0 = -1 MPa between two fixed frictionless walls on springs of p = 1e11 N/m (two a
     side): the block expands into them until E eps_x = sigma - sigma_0 and p (eps_x L / 2) x
-    2 = -sigma x 1 m: sigma = sigma_0 / (1 + E / (p L)) = -0.990099 MPa; the walls carry it.
+    2 = -sigma H: sigma = sigma_0 / (1 + E H / (p L)) = -0.990099 MPa (H = L = 1 m); the
+    walls carry it.
     (With friction the walls' shear springs hold the block's Poisson expansion: -0.98946.)"""
     scene = dda.Scene(gravity=0.0)
     scene.add_block(box(-1, 0, 1, 1), ROCK, fixed=True, name="left")
@@ -117,3 +118,36 @@ def test_initial_stress_in_scene_files_and_checkpoints(tmp_path):
     bad = text.replace("stress = [-1e5, -2e5, 3e4]", "stress = [-1e5, -2e5]")
     with pytest.raises(SceneFileError, match=r"blocks\[1\]\.stress: must be \[sxx, syy, sxy\]"):
         load_scene(write(tmp_path, bad, "bad.toml"))
+
+
+def test_a_block_whose_motion_is_known_drops_its_stress():
+    """A fixed or fully moved block has no unknowns for a stress to act on: its stress was
+    kept and counted 25 kJ/m of strain energy in energy(free_only=True) beside 45 J/m of the
+    free blocks' (a review)."""
+    from dda.energy import energy
+
+    scene = dda.Scene(gravity=0.0)
+    scene.add_block(box(0, 0, 1, 1), ROCK, fixed=True, stress=(-1e6, 0, 0), name="base")
+    moved = scene.add_block(box(2, 0, 1, 1), ROCK, name="moved")
+    scene.add_block(box(0, 1, 1, 1), ROCK, name="free")
+    scene.prescribe_motion(moved, displacement=lambda t: (1e-3 * t, 0.0))
+    scene.set_initial_stress((-2e5, -1e5, 0.0))
+    scene.set_joint(JointMaterial(1e10, 1e10, CoulombSingle(phi=30.0)))
+    sim = dda.Simulation(scene, dt=1e-3)
+    np.testing.assert_array_equal(sim.committed.stress[[0, 1]], 0.0)
+    np.testing.assert_array_equal(sim.committed.stress[2], [-2e5, -1e5, 0.0])
+    s = np.array([-2e5, -1e5, 0.0])
+    alone = 0.5 * s @ np.linalg.solve(ROCK.elasticity(), s)  # the free block's, area 1
+    assert energy(sim, free_only=True).strain == pytest.approx(alone, rel=1e-12)
+
+
+def test_a_field_that_grows_below_top_warns_of_blocks_above_it(tmp_path):
+    from dda.io.scene_file import load_scene
+    from dda.plausibility import PlausibilityWarning
+    from tests.test_scene_file import FULL, write
+
+    field = FULL.replace("[[shake]]", "[initial_stress]\nper_depth = [-13000, -26000, 0]\n"
+                         "top = 1.2\n\n[[shake]]", 1)
+    with pytest.warns(PlausibilityWarning, match=r"initial_stress\.top: \d+ block\(s\) have "
+                      r"their centroid above top = 1.2 m .*tension for a compressive field"):
+        load_scene(write(tmp_path, field))

@@ -124,14 +124,16 @@ def test_a_scene_files_warnings_name_its_line(tmp_path):
                for g in got), got
 
 
-def _shaken_block(penalty, freq=10.0):
-    """A 1 x 0.5 m block (1,250 kg/m) on a shaken table, a sine of ``freq`` Hz."""
+def _shaken_block(penalty, freq=10.0, acceleration=None):
+    """A 1 x 0.5 m block (1,250 kg/m) on a shaken table, a sine of ``freq`` Hz (or
+    ``acceleration``)."""
     rock = LinearElastic(young=1e10, poisson=0.25, density=2500.0)
     scene = dda.Scene(gravity=9.81)
     table = scene.add_block(box(0, 0, 3, 0.5), rock, fixed=True, name="table")
     scene.add_block(box(1, 0.5, 1, 0.5), rock, name="block")
     scene.set_joint(JointMaterial(penalty, penalty, CoulombSingle(phi=30.0)))
-    scene.shake(table, acceleration=lambda t: (3.0 * np.sin(2 * np.pi * freq * t), 0.0))
+    scene.shake(table, acceleration=acceleration or (
+        lambda t: (3.0 * np.sin(2 * np.pi * freq * t), 0.0)))
     return scene
 
 
@@ -168,12 +170,16 @@ def test_the_shaking_check_calls_a_python_shaking_a_few_thousand_times_at_most()
         calls.append(t)
         return (3.0 * np.sin(2 * np.pi * 10.0 * t), 0.0)
 
-    scene = _shaken_block(1e9)
-    scene._shakes.clear()
-    scene.shake("table", acceleration=table)
+    scene = _shaken_block(1e9, acceleration=table)
     calls.clear()
     dda.Simulation(scene, dt=1e-3)
-    assert 0 < len(calls) <= 2100
+    assert 0 < len(calls) <= 4100
+    # ... over the auto rule's 20 s: a shaking that starts at 3 s is seen (over the first
+    # 2 s it was not)
+    late = _shaken_block(1e9, acceleration=lambda t: (
+        3.0 * np.sin(2 * np.pi * 10.0 * t) * (t > 3.0), 0.0))
+    got, _ = caught(lambda: dda.Simulation(late, dt=0.05))
+    assert len(got) == 1 and "of the shaking's 10" in got[0], got
 
 
 def test_a_soft_joint_between_two_blocks_is_judged_on_their_reduced_mass():

@@ -758,7 +758,9 @@ def _read_initial_stress(r, data, blocks, set_initial_stress) -> None:
     """``[initial_stress]``: ``stress = [sxx, syy, sxy]`` (Pa, tension positive) plus, with
     ``per_depth = [a, b, c]`` (Pa/m) and ``top`` (m), ``per_depth x (top - y)`` at each
     block's centroid (an in-situ field that grows with depth); on ``blocks`` (names), by
-    default every block that is neither fixed nor rigid (:meth:`dda.Scene.set_initial_stress`)."""
+    default every block that is neither fixed nor rigid (:meth:`dda.Scene.set_initial_stress`).
+    It is read after ``[[blocks]]`` and ``[[cut]]`` and replaces their ``stress`` on the
+    blocks it covers."""
     if "initial_stress" not in data:
         return
     p = ("initial_stress",)
@@ -770,8 +772,11 @@ def _read_initial_stress(r, data, blocks, set_initial_stress) -> None:
     if "per_depth" in t:
         grad = np.array(_stress(r, {"stress": t["per_depth"]}, (*p, "per_depth")))
         top = r.number(t, p, "top")
+        above = []
 
         def stress(x, y):
+            if y > top:
+                above.append(y)
             return tuple(base + grad * (top - y))
     else:
         stress = tuple(base)
@@ -781,6 +786,11 @@ def _read_initial_stress(r, data, blocks, set_initial_stress) -> None:
             raise r.error((*p, "blocks"), "must be a list of block names")
         chosen = [_block_of(r, blocks, {"block": n}, (*p, "blocks")) for n in t["blocks"]]
     r.call(p, set_initial_stress, stress, chosen)
+    if "per_depth" in t and above:
+        warnings.warn(str(r.error((*p, "top"), (
+            f"{len(above)} block(s) have their centroid above top = {top:g} m (the highest "
+            f"at y = {max(above):g} m): per_depth gives them the opposite stress there, "
+            "tension for a compressive field"))), PlausibilityWarning, stacklevel=4)
 
 
 def _read_cuts(r, data, materials, add_block) -> dict:
