@@ -207,7 +207,7 @@ def test_the_guard_stops_a_run_whose_detection_misses_a_contact(monkeypatch, tmp
     import dda.step as step
     from dda.contact.detection import CandidateContacts
 
-    def blind(x, topo, d0, limit, pairs=None, sunk_depth=None, boxes=None):
+    def blind(x, topo, d0, limit, pairs=None, sunk_depth=None, boxes=None, touch=0.0):
         return CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
 
     monkeypatch.setattr(step, "narrow_phase", blind)
@@ -617,7 +617,7 @@ def test_the_guard_stops_a_bar_that_passed_through_a_plate_between_its_corners(m
     import dda.step as step
     from dda.contact.detection import CandidateContacts
 
-    def blind(x, topo, d0, limit, pairs=None, sunk_depth=None, boxes=None):
+    def blind(x, topo, d0, limit, pairs=None, sunk_depth=None, boxes=None, touch=0.0):
         return CandidateContacts(*(np.zeros(0, dtype=np.int64) for _ in range(4)))
 
     monkeypatch.setattr(step, "narrow_phase", blind)
