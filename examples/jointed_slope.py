@@ -10,20 +10,19 @@ With these defaults (legacy DDA, 0.3 s, joints of 5e10 N/m) the run takes about 
 steps, 46 of them cut because OPEN-CLOSE did not settle in 30 passes, and the face blocks end
 21.94 mm (median) and 27.10 mm (most) from where they started relative to the base (36-38 s
 beside other runs on two cores, 2026-12-06); on a machine with AVX-512, where numpy's
-vectorized functions round some last bits otherwise, 990 steps, 47 cut, 21.97 / 27.45 mm in 24
-s (2026-12-07), and since corners within 1e-6 of a block's size of a face touch
-(``dda.contact.detection.TOUCH_TOLERANCE``) 1,210 steps, 43 cut, 21.97 / 27.58 mm (a run this
-stiff for its dt takes another path from the first steps on; five perturbed runs of it took 874
-to 1,299 steps). ``--solver newton``: 801 steps, 21 cut, 22.35 / 26.52 mm (77 s beside two
-other runs on two cores; 38 s for 656 steps in an earlier version, alone); on the AVX-512
-machine 702 steps, 27 cut, 21.77 / 26.13 mm, and with the touching corners 674, 32, 21.62 /
-26.28 mm (34 s). The penalty is stiff for dt (540 times the lightest block's inertia at 2e-3
-s): a 1 x 1.6 m block's contact period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so
-the contacts settle only at a fraction of the 2e-3 s asked for and the steps average 2.9e-4 s;
-``dda.PenaltyWarning`` says so after 20 cuts, and advises 2e10 N/m (no softer: the rule's 2 E
-for a jointed mass, below) at 4.3e-4 s, or 2.7e-4 s at 5e10 N/m. About half the cuts are tries
-at twice the working step that fail (20 of 35 in an earlier version of the run), the rest steps
-whose OPEN-CLOSE ends in a cycle of a few contacts' states and lagged normal forces.
+vectorized functions round some last bits otherwise, 990 steps, 47 cut, 21.97 / 27.45 mm in
+23-24 s (2026-12-07; the same with the first step's touching tolerance of
+``dda.contact.detection``, which taken at every step sent this run, as stiff as it is for its
+dt, another way: 1,210 steps, 43 cut, 21.97 / 27.58 mm). ``--solver newton``: 801 steps, 21
+cut, 22.35 / 26.52 mm (77 s beside two other runs on two cores; 38 s for 656 steps in an
+earlier version, alone); on the AVX-512 machine 702 steps, 27 cut, 21.77 / 26.13 mm (31 s). The
+penalty is stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x 1.6 m block's
+contact period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the contacts settle only
+at a fraction of the 2e-3 s asked for and the steps average 2.9e-4 s; ``dda.PenaltyWarning``
+says so after 20 cuts, and advises 2e10 N/m (no softer: the rule's 2 E for a jointed mass,
+below) at 4.3e-4 s, or 2.7e-4 s at 5e10 N/m. About half the cuts are tries at twice the working
+step that fail (20 of 35 in an earlier version of the run), the rest steps whose OPEN-CLOSE
+ends in a cycle of a few contacts' states and lagged normal forces.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``; ``sim.choices``
 is printed): blocks carry blocks here, so the penalty is twice the rock's Young's modulus, 2e10
