@@ -178,6 +178,12 @@ def test_frames_relative_to_a_block(series):
         _blocks_mesh(pv, last, "velocity", relative_to=7)
 
 
+def info_of(path, capsys) -> str:
+    """What ``dda info PATH`` prints (it must succeed)."""
+    assert main(["info", str(path)]) == 0
+    return capsys.readouterr().out
+
+
 def test_info_describes_the_scene(series, capsys):
     scene, pvd = series
     assert main(["info", str(scene)]) == 0
@@ -204,8 +210,7 @@ fixed = true
 [[shake]]""")
     scene = tmp_path / "interval.toml"
     scene.write_text(text)
-    assert main(["info", str(scene)]) == 0
-    out = capsys.readouterr().out
+    out = info_of(scene, capsys)
     assert "for each of 6 VTU frames" in out
     assert "contacts   2 vertex-edge pairs touching at the start (1 block pair)" in out
     # an interval shorter than the step: a frame a step (it counted ten a step), and one
@@ -258,8 +263,7 @@ def test_info_describes_a_scripts_first_simulation(tmp_path, capsys):
     simulation and stops the script there (an ``except Exception`` in it does not go on)."""
     script = tmp_path / "script.py"
     script.write_text(SCRIPT)
-    assert main(["info", str(script)]) == 0
-    out = capsys.readouterr().out
+    out = info_of(script, capsys)
     assert "script.py (the first simulation it runs)" in out
     assert "blocks     2 (1 free of which 0 rigid, 1 fixed or moved)" in out
     assert "effects    gravity, shaking of base" in out
