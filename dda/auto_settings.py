@@ -260,13 +260,15 @@ class AutoChoice:
 
 
 def _samples(histories, duration: float | None):
-    """Each history's acceleration sampled at 1 kHz (or its record's sampling interval, the
-    median spacing of its samples, where that is finer) from 0 to ``duration`` (default: the
-    record's end, at most ``PROBE_SECONDS``): ``(step, a)`` pairs, ``a`` of shape (n, 2).
+    """Each history's acceleration sampled at 1 kHz (or its record's sampling interval, its
+    length over its samples less one, where that is finer; ``PROBE_SAMPLES`` samples at
+    most) from 0 to ``duration`` (default: the record's end, at most ``PROBE_SECONDS``):
+    ``(step, a)`` pairs, ``a`` of shape (n, 2).
 
     Not the finest spacing: a jump written as two samples 1e-12 s apart, or two records
     merged at the union of their times that differ in the last bit (5.6e-17 s), asked for
-    1e17 samples (a MemoryError of 1.88 EiB; an earthquake engineer's review, 2026-12-07)."""
+    1e17 samples (a MemoryError of 1.88 EiB; an earthquake engineer's review, 2026-12-07);
+    nor the median, which a square wave of such pairs makes the hair (73.8 GiB)."""
     span = min(duration, PROBE_SECONDS) if duration else PROBE_SECONDS
     out = []
     for h in histories:
