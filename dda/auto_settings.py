@@ -219,11 +219,12 @@ from dda._checks import finite_number
 from dda.bolts import shortest_period
 from dda.contact.friction import FrictionLaw
 from dda.penalty_advice import TARGET_DEPTH
+from dda.plausibility import DT_PERIODS
 
 __all__ = ["AutoChoice", "BOLT_STEPS_PER_PERIOD", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS",
            "STATIC_CAP_PERIODS", "STATIC_DISPLACEMENT_RATIO", "STATIC_RESOLUTION",
            "STATIC_STEPS", "choose", "largest_onset_drop", "penalty_floor",
-           "shaking_frequency", "steps_for_drop"]
+           "shaking_frequency", "static_step_cap", "steps_for_drop"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block, for
 #: a solver without its own ``auto_kappa`` (legacy DDA's; the fully implicit method takes 10)
@@ -246,7 +247,9 @@ STATIC_STEPS = 40
 STATIC_DISPLACEMENT_RATIO = 0.01
 STATIC_RESOLUTION = 1e-3
 #: ... capped at this many contact periods of the lightest free block on the stiffest joint
-STATIC_CAP_PERIODS = 50.0
+#: (half of those at which a dynamic step is warned of; the factor of safety's static trials
+#: take the same cap, static_step_cap)
+STATIC_CAP_PERIODS = 0.5 * DT_PERIODS
 
 
 @dataclass(frozen=True)
@@ -600,19 +603,26 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
     return AutoChoice(dt, pn, pn, "\n".join(lines))
 
 
-def _static_cap(model, dt: float, penalties: np.ndarray, m: float, name: str,
-                lines: list) -> float:
-    """Rule 9's cap: a static ``dt`` at most ``STATIC_CAP_PERIODS`` contact periods
-    ``2 pi sqrt(m / p)`` of the lightest free block (mass ``m``, ``name``) on the stiffest of
-    the joints' ``penalties``; the reason added to ``lines`` when it binds."""
+def static_step_cap(model, penalties: np.ndarray) -> float:
+    """The longest static step: ``STATIC_CAP_PERIODS`` contact periods ``2 pi sqrt(m / p)``
+    of the lightest free block on the stiffest of the joints' ``penalties`` (inf without a
+    finite one). Rule 9's cap, and the factor of safety's static trials'."""
     finite = penalties[np.isfinite(penalties)]
     if not finite.size:
-        return dt
-    p = float(finite.max())
-    cap = STATIC_CAP_PERIODS * 2.0 * np.pi * np.sqrt(m / p)
+        return float("inf")
+    m = float((model.density * model.size ** 2)[model.free].min())
+    return float(STATIC_CAP_PERIODS * 2.0 * np.pi * np.sqrt(m / float(finite.max())))
+
+
+def _static_cap(model, dt: float, penalties: np.ndarray, m: float, name: str,
+                lines: list) -> float:
+    """Rule 9's cap (:func:`static_step_cap`) on a static ``dt``; the reason added to
+    ``lines`` (the lightest free block ``name`` of mass ``m``) when it binds."""
+    cap = static_step_cap(model, penalties)
     if cap < dt:
+        p = float(penalties[np.isfinite(penalties)].max())
         lines.append(f"dt: capped at {STATIC_CAP_PERIODS:g} contact periods 2 pi sqrt(m / p) "
                      f"of the lightest free block ({name}, {m:.3g} kg/m) on the stiffest "
                      f"joint ({p:.3g} N/m): {cap:.3g} s")
-        return float(cap)
+        return cap
     return dt

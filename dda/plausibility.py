@@ -159,6 +159,7 @@ def check_time_step(model, dt: float) -> None:
 def _check_bolt_step(model, dt: float) -> None:
     """A step that resolves the fastest bolt's vibration (:func:`dda.bolts.shortest_period`)
     in fewer than ``BOLT_STEPS`` steps: the bolts' dynamic forces come out low."""
+    from dda.auto_settings import BOLT_STEPS_PER_PERIOD  # noqa: PLC0415 (imports this)
     from dda.bolts import released_peak, shortest_period  # noqa: PLC0415 (the kernels)
 
     period, bolt = shortest_period(model)
@@ -168,15 +169,15 @@ def _check_bolt_step(model, dt: float) -> None:
         _warn(f"Simulation: dt = {dt:g} s resolves the vibration of {bolt} (period "
               f"{period:.3g} s) in {steps:.2g} steps a period: Newmark's damping takes "
               f"{low:.2g}% off the peak force of a bolt let go from rest, so a bolt may "
-              f"survive that would break; take dt at most {period / 250:.3g} s (1% off), or "
-              "dt='auto'", stacklevel=5)
+              f"survive that would break; take dt at most "
+              f"{period / BOLT_STEPS_PER_PERIOD:.3g} s (1% off), or dt='auto'", stacklevel=5)
 
 
 #: a given dt that resolves the shaking's 99%-energy frequency in fewer than this share of
 #: the solver's own auto_steps_per_period gets a warning (Newton: 8, legacy DDA: 20 steps)
 SHAKING_STEPS_SHARE = 1.0 / 20.0
-#: a given penalty whose contact frequency, sqrt(p / m) / (2 pi) of the heaviest free block
-#: on the softest joint, is below this multiple of the shaking's frequency gets a warning
+#: a given penalty whose contact frequency sqrt(p / m) / (2 pi) (_softest_contact) is below
+#: this multiple of the shaking's frequency gets a warning
 SHAKING_CONTACT_RATIO = 3.0
 #: a callable shaking is sampled this often (s) for these warnings (4,000 calls over the
 #: auto rule's 20 s; its frequencies up to 100 Hz)
@@ -194,9 +195,10 @@ def check_shaking_resolution(model, dt: float, solver, shakes, dt_given: bool,
       record (99% below 11.9 Hz) slid 258.6 mm in Newmark's rigid-block integration; at dt
       0.02 s (4 steps a period) Newton erred +2.4% and legacy DDA -18 to -28%, at 0.05 s
       +32% and -78 to -98%, with no word said (an earthquake engineer's review, 2026-12-07).
-    - **penalty**: a contact frequency ``sqrt(p / m) / (2 pi)`` (the heaviest free block on
-      the softest given joint) below ``SHAKING_CONTACT_RATIO`` times that frequency: the
-      block rides the shaking on its springs. The same block at 1e6 / 3e6 / 1e7 / 3e7 N/m
+    - **penalty**: a contact frequency ``sqrt(p / m) / (2 pi)`` (:func:`_softest_contact`:
+      a joint given for a pair with the pair's reduced mass, the default joint with the
+      heaviest free block) below ``SHAKING_CONTACT_RATIO`` times that frequency: the block
+      rides the shaking on its springs. The same block at 1e6 / 3e6 / 1e7 / 3e7 N/m
       (contact frequencies 6.4 / 11 / 20 / 35 Hz) erred +15 / +10 / +5 / +1.8% (Newton) and
       -26 / -12 / -5 / -1.8% (legacy DDA), while it sank at most 1.9% of its half-width, below
       the penalty advice's 5%.

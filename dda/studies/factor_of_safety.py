@@ -114,7 +114,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from dda.errors import SimulationError
-from dda.plausibility import DT_PERIODS
 from dda.runtime import usable_cores
 from dda.simulation import Simulation
 from dda.studies.reduction import reduced_scene
@@ -299,14 +298,13 @@ def _step_cap(model, dt: float) -> float:
     simulation would choose at ``dt`` (:func:`dda.auto_settings.choose`; at the capped step
     its inertia rule, ``2 kappa m / dt^2`` with kappa 3 to 10, comes to at most ``20 / (100
     pi)^2`` of that penalty, so the choice stands)."""
+    from dda.auto_settings import choose, static_step_cap
+
     penalties = np.asarray(model.joints.normal_penalty, dtype=float)
     if np.isnan(penalties).any():
-        from dda.auto_settings import choose
-
         auto = choose(model, None, dt, auto_penalty=True).normal_penalty
         penalties = np.where(np.isnan(penalties), auto, penalties)
-    mass = (model.density * model.size ** 2)[model.free].min()
-    return 0.5 * DT_PERIODS * 2.0 * math.pi * math.sqrt(mass / penalties.max())
+    return static_step_cap(model, penalties)
 
 
 @dataclass(frozen=True, eq=False)
