@@ -101,6 +101,13 @@ class TimeTable:
                      for c in (self.x, self.y))
 
 
+def sampling_interval(times) -> float:
+    """A record's sampling interval: its length over its samples less one (a jump written
+    as two samples a hair apart does not make it a hair); inf for fewer than 2 samples."""
+    times = np.asarray(times, dtype=float)
+    return float((times[-1] - times[0]) / (len(times) - 1)) if len(times) > 1 else np.inf
+
+
 class AccelerationHistory:
     """A base acceleration a(t) and its exact integrals v(t) and u(t), starting from rest.
 
@@ -197,8 +204,7 @@ class AccelerationHistory:
         a square wave's)."""
         if self._callable is not None:
             return np.inf
-        t = self._times
-        return float((t[-1] - t[0]) / (len(t) - 1))
+        return sampling_interval(self._times)
 
     def sample(self, t: np.ndarray) -> np.ndarray:
         """(n, 2) acceleration at the times ``t`` (a record: linear between its samples)."""

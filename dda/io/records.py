@@ -33,6 +33,8 @@ from pathlib import Path
 
 import numpy as np
 
+from dda.effects import sampling_interval
+
 __all__ = ["BASELINES", "G", "Record", "RecordError", "baseline_correct", "guess_format",
            "integrate", "on_common_times", "read_at2", "read_knet", "read_record",
            "write_at2"]
@@ -237,13 +239,6 @@ def baseline_correct(times, acceleration, method: str = "quadratic") -> np.ndarr
     return a - (q @ c).reshape(a.shape)
 
 
-def _sampling_interval(times) -> float:
-    """A record's sampling interval: its length over its samples less one (a jump written
-    as two samples a hair apart does not make it a hair); inf for fewer than 2."""
-    times = np.asarray(times, dtype=float)
-    return float((times[-1] - times[0]) / (len(times) - 1)) if len(times) > 1 else np.inf
-
-
 def on_common_times(times_a, values_a, times_b, values_b):
     """Two records sampled at different times, both at the union of their sample times.
 
@@ -270,7 +265,7 @@ def on_common_times(times_a, values_a, times_b, values_b):
         return ta, va.copy(), vb.copy()
     end = min(ta[-1], tb[-1])
     ta_in, tb_in = ta[ta <= end], tb[tb <= end]
-    spacing = min(_sampling_interval(ts) for ts in (ta, tb))
+    spacing = min(sampling_interval(ts) for ts in (ta, tb))
     if np.isfinite(spacing) and len(ta_in) and len(tb_in):
         tol = 1e-9 * spacing
         at = np.searchsorted(ta_in, tb_in)

@@ -173,6 +173,7 @@ from pathlib import Path
 import numpy as np
 
 from dda import registry
+from dda.effects import sampling_interval
 from dda.plausibility import PlausibilityWarning, check_direction
 
 try:
@@ -977,7 +978,7 @@ def _shake_file(r, s, p, folder):
         if av.shape[1] != 1:
             raise r.error((*p, "vertical"), f"{s['vertical']} has two components: vertical "
                                             "takes a record of one")
-        coarser = max(records._sampling_interval(t), records._sampling_interval(tv))
+        coarser = max(sampling_interval(t), sampling_interval(tv))
         if abs(tv[-1] - t[-1]) > coarser * (1.0 + 1e-9):  # (a sample's difference is none)
             # the shaking covers the time both cover: a run past it is refused, and that
             # message knows only the shaken block
