@@ -223,7 +223,7 @@ from dda.plausibility import DT_PERIODS
 
 __all__ = ["AutoChoice", "BOLT_STEPS_PER_PERIOD", "KAPPA", "MASS_STIFFNESS", "PROBE_SECONDS",
            "STATIC_CAP_PERIODS", "STATIC_DISPLACEMENT_RATIO", "STATIC_RESOLUTION",
-           "STATIC_STEPS", "choose", "largest_onset_drop", "penalty_floor",
+           "STATIC_STEPS", "choose", "static_step", "largest_onset_drop", "penalty_floor",
            "shaking_frequency", "static_step_cap", "steps_for_drop"]
 
 #: the penalty as a multiple of Newmark's inertia 2 m / dt^2 of the lightest free block, for
@@ -501,9 +501,7 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
         if g <= 0.0:
             raise ValueError("auto settings: a static analysis without gravity has no "
                              "acceleration to set its step by; give dt")
-        d = STATIC_DISPLACEMENT_RATIO * float(np.min(model.size[free]))
-        a = STATIC_RESOLUTION * g
-        dt = float(np.sqrt(4.0 * d / (STATIC_STEPS * a)))
+        d, dt = _static_move(model)
         lines.append(f"dt: a static step ({STATIC_STEPS} of them move the smallest free block "
                      f"{100 * STATIC_DISPLACEMENT_RATIO:g}% of its size, {d:.3g} m, under an "
                      f"unbalanced {STATIC_RESOLUTION:g} g): {dt:.3g} s")
@@ -601,6 +599,28 @@ def choose(model, solver, dt: float | None, shakes=(), duration: float | None = 
         dt = _static_cap(model, dt, np.where(np.isfinite(penalties), penalties, pn), m, name,
                          lines)
     return AutoChoice(dt, pn, pn, "\n".join(lines))
+
+
+def _static_move(model) -> tuple[float, float]:
+    """Rule 9: the move ``d`` (``STATIC_DISPLACEMENT_RATIO`` of the smallest free block's
+    size) and the static step ``sqrt(4 d / (STATIC_STEPS a))``, ``STATIC_STEPS`` of which
+    move that block ``d`` under an unbalanced ``a = STATIC_RESOLUTION g`` (inf without
+    gravity)."""
+    d = STATIC_DISPLACEMENT_RATIO * float(np.min(model.size[model.free]))
+    a = STATIC_RESOLUTION * abs(model.gravity or 0.0)
+    return d, float(np.sqrt(4.0 * d / (STATIC_STEPS * a))) if a > 0.0 else float("inf")
+
+
+def static_step(model) -> float:
+    """Rule 9's static step of ``model`` with its joints' penalties (set), capped by
+    :func:`static_step_cap`: the settled start's step (:mod:`dda.settling`). Without
+    gravity, the cap alone; without that either, ``ValueError``."""
+    dt = min(_static_move(model)[1],
+             static_step_cap(model, np.asarray(model.joints.normal_penalty, dtype=float)))
+    if not np.isfinite(dt):
+        raise ValueError("a static step: the scene has no gravity and no joint penalty to "
+                         "set it by")
+    return dt
 
 
 def static_step_cap(model, penalties: np.ndarray) -> float:

@@ -49,6 +49,8 @@ def _run_scene(path, out, duration, progress, outside=False):
           f"dt {sim.dt:g} s")
     for line in sim.choices.splitlines():  # what "auto" settings chose, and why
         print(f"  auto: {line}")
+    if sim.start == "settled":
+        print(f"  {sim.settle().text}")
     ckpt = loaded.checkpoint_settings(out)
     result = sim.run(duration, output=writer, progress=progress, **ckpt)
     print(result.stats.summary())
@@ -196,6 +198,9 @@ def describe(loaded, budget: float = 2.0) -> str:
     # what "auto" settings chose, and why (dda.auto_settings)
     lines += [("auto       " if k == 0 else "           ") + line
               for k, line in enumerate(sim.choices.splitlines())]
+    if sim.start == "settled":
+        lines.append("start      settled: static steps at rest under the loads at t = 0, the "
+                     "joints' friction held (dda.settling; not timed below)")
     if loaded.duration is not None:
         # a record that ends before the run: the run refuses it at once, and so does this
         for s in model.shakes:

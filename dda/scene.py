@@ -559,7 +559,8 @@ class Scene:
             an earlier one's (and ``add_block``'s) stress on the blocks it covers.
 
         The contacts start unloaded: the stressed blocks push each other until their joints
-        carry the stress (a static analysis, ``analysis="static"``, finds that state; a
+        carry the stress (a static analysis, ``analysis="static"``, finds that state, and
+        so does a dynamic run's settled start, ``Simulation(start="settled")``; from rest a
         dynamic run starts with the push: README, "A dynamic run's start").
         """
         if blocks is None:

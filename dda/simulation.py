@@ -42,8 +42,9 @@ from dda.profiling import StepProfile
 from dda.progress import ProgressBar
 from dda.recorder import Recorder, frame
 from dda.result import Frame, Result
-from dda.runtime import run_environment
+from dda.runtime import blas_threads, run_environment
 from dda.scene import Scene
+from dda.settling import Settling, settle
 from dda.solvers.base import NonlinearSolver
 from dda.solvers.newton import NewtonRaphson
 from dda.step import StepSettings, StepState, step
@@ -116,6 +117,14 @@ class Simulation:
         asked and a retaken step costs little; in a jointed mass many contacts reverse by
         micrometres in most steps. Each located reversal is in ``result.stats.reversals``
         as (time, share of the step).
+    start : {"rest", "settled"}
+        How a dynamic run starts. "rest" (the default): the scene as built, gravity and the
+        loads switched on at t = 0 over contact springs that carry nothing yet, so the blocks
+        drop onto their springs and bounce ("A dynamic run's start" in the README).
+        "settled": the first :meth:`run` first brings the scene to rest under its loads at
+        t = 0 with the joints' friction held, by static steps, then runs from there with the
+        joints' own friction (:mod:`dda.settling`; :meth:`settle`). Only for a dynamic
+        analysis (a static one settles by its own steps).
 
     Attributes
     ----------
@@ -128,6 +137,8 @@ class Simulation:
     choices : str
         What was chosen for "auto" settings (dt, penalties) and why, one line each; empty
         when nothing was "auto".
+    settling : dda.settling.Settling or None
+        How the settled start went (steps, step size, largest move), once it has.
 
     Examples
     --------
@@ -145,7 +156,7 @@ class Simulation:
                  analysis: str = "dynamic", velocity_carry: float = 1.0,
                  max_open_close: int = 12, record_every: int = 1, output=None,
                  max_displacement_ratio: float = 0.25, penetration_tolerance: float = 0.01,
-                 locate_reversals: bool | None = None):
+                 locate_reversals: bool | None = None, start: str = "rest"):
         if not isinstance(scene, Scene):
             hint = ("; dda.load_scene gives a LoadedScene: pass its .scene, or call its "
                     ".simulation() for the file's settings"
@@ -174,6 +185,11 @@ class Simulation:
             raise ValueError(
                 f"Simulation: analysis must be 'dynamic' or 'static', got {analysis!r}"
             )
+        if start not in ("rest", "settled"):
+            raise ValueError(f"Simulation: start must be 'rest' or 'settled', got {start!r}")
+        if start == "settled" and analysis == "static":
+            raise ValueError("Simulation: start='settled' is for a dynamic analysis (a static "
+                             "one brings the scene to rest by its own steps)")
         carry = finite_number("velocity_carry", velocity_carry, where="Simulation")
         if not 0.0 <= carry <= 1.0:
             raise ValueError(f"Simulation: velocity_carry must lie in [0, 1], got {carry}")
@@ -201,6 +217,8 @@ class Simulation:
             raise TypeError("Simulation: locate_reversals must be True, False or None (by the "
                             f"scene's size), got {locate_reversals!r}")
         self.locate_reversals = bool(locate_reversals)
+        self.start = start
+        self.settling = None
         self.choices = ""
         auto_penalty = bool(self.model.joints.auto)
         if auto_dt or auto_penalty:
@@ -250,7 +268,9 @@ class Simulation:
         """What a run's :class:`Result` says it was (:meth:`Result.to_xarray`'s attributes)."""
         return {"dt": float(self.dt), "solver": repr(self.solver), "analysis": self.analysis,
                 "velocity_carry": float(self.velocity_carry),
-                "record_every": int(self.record_every), "choices": self.choices}
+                "record_every": int(self.record_every), "choices": self.choices,
+                "start": self.start,
+                "settling": "" if self.settling is None else self.settling.text}
 
     def energy(self):
         """The mechanical energy of the committed state (:func:`dda.energy.energy`)."""
@@ -303,6 +323,9 @@ class Simulation:
         """
         t_end, writer, checkpoint = self._prepare(duration, output, checkpoint,
                                                   checkpoint_every)
+        if (self.start == "settled" and self.settling is None
+                and self.committed.time == 0.0 and self.control.steps == 0):
+            self.settle()
         result = Result(self.scene, [b.name for b in self.scene.blocks],
                         record_every=self.record_every, settings=self._run_settings(),
                         initial_centroid=self.model.centroid_initial
@@ -347,6 +370,35 @@ class Simulation:
                 if writer is not None:
                     writer.close()
         return result
+
+    def settle(self, dt: float | None = None) -> Settling:
+        """Bring the run's start to rest under its loads at t = 0 with the joints' friction
+        held (:func:`dda.settling.settle`): the committed state becomes the settled one, at
+        t = 0 with the blocks' given velocities, and :attr:`settling` says how it went.
+
+        ``run`` calls it first under ``start="settled"``; call it yourself to look at the
+        settled state before a run. ``dt`` is the static step (default: rule 9's,
+        :func:`dda.auto_settings.static_step`). The displacements of a run from it are from
+        the scene's geometry: its first frame holds the settlement.
+
+        Raises
+        ------
+        ValueError
+            On a static analysis, or after the run has started.
+        SimulationError
+            When the scene does not stand with its joints held (a mechanism, a block in the
+            air): it then needs a start from rest.
+        """
+        if self.analysis == "static":
+            raise ValueError("Simulation.settle: a static analysis brings the scene to rest "
+                             "by its own steps")
+        if self.committed.time != 0.0 or self.control.steps or self.settling is not None:
+            raise ValueError("Simulation.settle: only a run's start can be settled, once (t = "
+                             f"{self.committed.time:g} s, {self.control.steps} steps taken)")
+        with blas_threads():
+            self.committed, self.settling = settle(self.model, self.committed, self.settings,
+                                                   dt)
+        return self.settling
 
     def _stop_recording(self, recorder) -> None:
         """Record and write the last committed state of a run stopped early

@@ -127,7 +127,8 @@ def _simulation_to_data(sim, store) -> dict:
         "max_open_close": int(sim.max_open_close), "record_every": int(sim.record_every),
         "max_displacement_ratio": float(sim.max_displacement_ratio),
         "penetration_tolerance": float(sim.penetration_tolerance), "choices": sim.choices,
-        "locate_reversals": bool(sim.locate_reversals),
+        "locate_reversals": bool(sim.locate_reversals), "start": sim.start,
+        "settling": None if sim.settling is None else asdict(sim.settling),
         "normal_penalty": store.put("model/normal_penalty", joints.normal_penalty),
         "shear_penalty": store.put("model/shear_penalty", joints.shear_penalty),
     }
@@ -260,25 +261,38 @@ def _open(path: Path):
 
 
 def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict:
+    from dda.settling import Settling
     from dda.simulation import Simulation
 
     scene = scene_from_data(header["scene"], store)
     s = header["simulation"]
-    if isinstance(s, dict):  # a checkpoint written before slip reversals were located
-        s = {"locate_reversals": False, **s}
+    if isinstance(s, dict):  # a checkpoint written before slip reversals were located, or
+        # before a settled start
+        s = {"locate_reversals": False, "start": "rest", "settling": None, **s}
     _expect(s, "simulation", {"dt", "solver", "analysis", "velocity_carry", "max_open_close",
                               "record_every", "max_displacement_ratio",
                               "penetration_tolerance", "choices", "normal_penalty",
-                              "shear_penalty", "locate_reversals"})
+                              "shear_penalty", "locate_reversals", "start", "settling"})
     if not isinstance(s["locate_reversals"], bool):
         raise CheckpointError("simulation.locate_reversals: not true or false")
+    settling = s["settling"]
+    if settling is not None:
+        settling = _expect(settling, "simulation.settling",
+                           {f.name for f in fields(Settling)})
+        try:
+            settling = Settling(int(settling["steps"]), float(settling["dt"]),
+                                float(settling["largest"]), str(settling["block"]),
+                                float(settling["last_move"]), int(settling["cuts"]))
+        except (TypeError, ValueError):
+            raise CheckpointError("simulation.settling: not steps, dt, moves and a block") \
+                from None
     try:
         sim = Simulation(scene, dt=s["dt"], solver=_solver(s["solver"]),
                          analysis=s["analysis"], velocity_carry=s["velocity_carry"],
                          max_open_close=s["max_open_close"], record_every=s["record_every"],
                          max_displacement_ratio=s["max_displacement_ratio"],
                          penetration_tolerance=s["penetration_tolerance"],
-                         locate_reversals=s["locate_reversals"])
+                         locate_reversals=s["locate_reversals"], start=s["start"])
     except (TypeError, ValueError) as exc:
         raise CheckpointError(f"its simulation's settings: {exc}") from None
     joints = sim.model.joints
@@ -291,6 +305,7 @@ def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict
     if not isinstance(s["choices"], str):
         raise CheckpointError("simulation.choices: not a text")
     sim.choices = s["choices"]
+    sim.settling = settling  # (a settled start is not settled again)
     sim.committed = _state(header["state"], store, sim.model, sim.committed)
     sim.control = _control(header["control"], sim.control)
     warned = header["warned"]

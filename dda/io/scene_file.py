@@ -119,6 +119,8 @@ The format (every table may be left out but ``[simulation]`` with its ``dt``, so
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
                                           # record_every, max_displacement_ratio,
                                           # penetration_tolerance, locate_reversals
+    start = "rest"                        # or "settled": at rest under the loads at t = 0
+                                          # (Simulation's start; dda.settling)
 
     [output]
     prefix = "case"                       # files OUT/case_00000.vtu ... and OUT/case.pvd
@@ -628,7 +630,7 @@ def load_scene(path, allow_outside_output: bool = False) -> LoadedScene:
     effects += _read_water(r, data, scene.set_water_table)
     solver, settings, duration = _read_simulation(r, data, settings=(
         "dt", "analysis", "velocity_carry", "max_open_close", "record_every",
-        "max_displacement_ratio", "penetration_tolerance", "locate_reversals"))
+        "max_displacement_ratio", "penetration_tolerance", "locate_reversals", "start"))
     output = _read_output(r, data, path, keys={"dir", "prefix", "every", "interval",
                                                "plain_names", "checkpoint",
                                                "checkpoint_every"},

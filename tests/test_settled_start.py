@@ -1,0 +1,324 @@
+"""A dynamic run's settled start (``Simulation(start="settled")``, :mod:`dda.settling`): the
+scene brought to rest under its loads at t = 0 with the joints' friction held, then run with
+the joints' own friction. Against the rigid block on a plane, a block and a stack at rest, a
+voussoir arch at its limit thickness (the thrust-line limit t/R = 0.1071), the moving base's
+analytical slip, a checkpoint's resume and the scene file."""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import dda
+from dda.contact import CoulombSingle, JointMaterial
+from dda.materials import LinearElastic
+from dda.settling import HeldFriction
+from dda.studies.cases import moving_base, relative_slip
+from dda.studies.studies import _moving_base_reference
+from tests.arch_scene import build as arch
+
+ROCK = LinearElastic(young=10e9, poisson=0.2, density=2000.0)
+G = 9.81
+
+
+def _incline(start, solver, dt="auto", plane=21.0, phi=20.0):
+    """A 0.5 m wide, 1 m tall block let go on a plane of ``plane`` degrees (friction
+    ``phi``), everything "auto"; the simulation and the block."""
+    a = math.radians(plane)
+    c, s = math.cos(a), math.sin(a)
+
+    def rot(points):
+        return [(c * x - s * y, s * x + c * y) for x, y in points]
+
+    scene = dda.Scene(gravity=G)
+    scene.add_block(rot([(-2, -0.5), (4, -0.5), (4, 0), (-2, 0)]), ROCK, fixed=True,
+                    name="plane")
+    block = scene.add_block(rot([(0, 0), (0.5, 0), (0.5, 1.0), (0, 1.0)]), ROCK, name="block")
+    scene.set_joint(JointMaterial("auto", "auto", CoulombSingle(phi)))
+    return dda.Simulation(scene, dt=dt, solver=solver, start=start), block, (c, s)
+
+
+def _slide_error(start, solver, dt="auto", duration=1.0):
+    """The slide down the plane in ``duration`` from the run's first frame, against the rigid
+    block's ``a t^2 / 2``, as a fraction of it."""
+    sim, block, (c, s) = _incline(start, solver, dt)
+    result = sim.run(duration, progress=False)
+    slide = -(result.displacement(block) @ np.array([c, s]))
+    rigid = 0.5 * G * (s - c * math.tan(math.radians(20.0))) * result.time[-1] ** 2
+    return (slide[-1] - slide[0]) / rigid - 1.0, sim
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_a_block_let_go_on_a_plane_slides_without_the_start_up_bounce(solver):
+    """From rest its springs' bounce carried it 8.3% (Newton) and 11.6% (legacy DDA) too far
+    in 1 s at the "auto" step (0.026 s); settled, Newton is the rigid block's slide and
+    legacy DDA is left with its own lag of slip, first order in dt from below."""
+    rest, _ = _slide_error("rest", solver)
+    settled, sim = _slide_error("settled", solver)
+    assert rest > 0.05  # measured +8.32% (Newton), +11.61% (legacy)
+    assert sim.settling is not None and sim.settling.steps <= 10  # measured 3 and 4
+    if solver == "newton":
+        assert abs(settled) < 5e-5  # measured -7.2e-8
+    else:
+        assert -0.06 < settled < 0  # measured -4.91%
+        half, _ = _slide_error("settled", solver, dt=sim.dt / 2)
+        assert settled / half == pytest.approx(2.0, rel=0.1)  # -2.50%: first order
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_a_block_at_rest_on_the_ground_stays_at_rest(solver):
+    """Settled, a block on a floor carries its weight on its springs from the first step and
+    does not move; from rest it drops onto them and bounces."""
+    speeds = {}
+    for start in ("rest", "settled"):
+        scene = dda.Scene(gravity=G)
+        scene.add_block([(-2, -1), (3, -1), (3, 0), (-2, 0)], ROCK, fixed=True)
+        block = scene.add_block([(0, 0), (1, 0), (1, 0.5), (0, 0.5)], ROCK)
+        scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(30.0)))
+        sim = dda.Simulation(scene, dt=2e-3, solver=solver, start=start)
+        forces = []
+        result = sim.run(0.2, progress=False, callback=lambda state, report, f=forces:
+                         f.append(-state.contacts.t_n.sum()))
+        weight = ROCK.density * 0.5 * G
+        speeds[start] = np.abs(np.diff(result.displacement(block)[:, 1])).max() / 2e-3
+        if start == "settled":
+            assert np.allclose(forces, weight, rtol=1e-6)
+            assert -result.displacement(block)[0, 1] > 0  # the settlement, in frame 0
+    assert speeds["rest"] > 5e-4  # measured 1.4e-3 m/s (2.5e-13 settled)
+    assert speeds["settled"] < 1e-9
+
+
+def _stack(start, solver, levels=3):
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-1, -1), (2, -1), (2, 0), (-1, 0)], ROCK, fixed=True)
+    for k in range(levels):
+        scene.add_block([(0, k), (1, k), (1, k + 1), (0, k + 1)], ROCK)
+    scene.set_joint(JointMaterial("auto", "auto", CoulombSingle(30.0)))
+    return dda.Simulation(scene, dt="auto", solver=solver, start=start)
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_a_stack_starts_with_its_static_joint_forces(solver):
+    """Each joint of a stack of three carries the weight above it from the first step and
+    keeps it; from rest the joints overshoot."""
+    weight = ROCK.density * G  # one 1 x 1 block
+    peaks = {}
+    for start in ("rest", "settled"):
+        sim = _stack(start, solver)
+        lowest = []
+
+        def low(state, report, lowest=lowest):
+            c = state.contacts
+            lowest.append(-c.t_n[np.minimum(c.bj, c.bk) == 0].sum())
+
+        sim.run(0.5, progress=False, callback=low)
+        peaks[start] = max(lowest) / (3 * weight)
+        if start == "settled":
+            assert np.allclose(lowest, 3 * weight, rtol=1e-5)
+            c = sim.state.contacts
+            for k in (1, 2):  # the joints above
+                on = (np.minimum(c.bj, c.bk) == k) & (np.maximum(c.bj, c.bk) == k + 1)
+                assert -c.t_n[on].sum() == pytest.approx((3 - k) * weight, rel=1e-5)
+    assert peaks["rest"] > 1.1  # measured 1.22 (Newton), 1.33 (legacy): the bounce
+    assert peaks["settled"] < 1.0 + 1e-5
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_a_voussoir_arch_just_above_its_limit_stands_settled(solver):
+    """A semicircular arch of 16 voussoirs, t/R = 0.108 against the thrust-line limit
+    0.1071: from rest its start-up bounce brings it down; settled it stands with its static
+    joint forces."""
+    outcomes = {}
+    for start in ("rest", "settled"):
+        scene, crown = arch(0.108)
+        sim = dda.Simulation(scene, dt="auto", solver=solver, start=start)
+        result = sim.run(0.5, progress=False)
+        outcomes[start] = result.displacement(crown)[:, 1]
+    # measured -6.8 mm (Newton) and -7.6 mm (legacy) at 0.5 s; -37 mm at 1 s, falling
+    assert outcomes["rest"][-1] < -2e-3
+    settled = outcomes["settled"]
+    assert settled[0] < 0  # the static sag, 0.177 mm
+    assert np.abs(settled - settled[0]).max() < 1e-5  # measured 1.6e-6 m
+
+
+def test_an_arch_below_its_limit_does_not_settle():
+    """At t/R = 0.107 (the limit 0.1071) the arch hinges even with its joints held: the
+    settle stops and says to start from rest."""
+    scene, _ = arch(0.107)
+    sim = dda.Simulation(scene, dt="auto", start="settled")
+    with pytest.raises(dda.SimulationError, match="does not stand.*start='rest'"):
+        sim.run(0.1, progress=False)
+
+
+def test_a_block_in_the_air_does_not_settle():
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-2, -1), (3, -1), (3, 0), (-2, 0)], ROCK, fixed=True)
+    scene.add_block([(0, 2), (1, 2), (1, 3), (0, 3)], ROCK, name="flying")
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(30.0)))
+    with pytest.raises(dda.SimulationError, match="'flying' moved"):
+        dda.Simulation(scene, dt=1e-3, start="settled").settle()
+
+
+def test_the_settled_start_keeps_the_given_velocities_and_the_loads_at_t0():
+    """The block takes its given velocity at t = 0 after settling, and a load that grows in
+    time is taken at its value at t = 0."""
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-2, -1), (3, -1), (3, 0), (-2, 0)], ROCK, fixed=True)
+    block = scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], ROCK, velocity=(0.3, 0.0))
+    scene.add_point_load(block, (0.5, 1.0), lambda t: (0.0, -1e4 * (1.0 + 100.0 * t)))
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(30.0)))
+    sim = dda.Simulation(scene, dt=1e-3, start="settled")
+    sim.settle()
+    state = sim.state
+    assert state.time == 0.0
+    np.testing.assert_allclose(state.velocity[1, :3], [0.3, 0.0, 0.0], atol=0)
+    weight = ROCK.density * G
+    # (at t = 1e-3 s it would be 1,000 N more; the settle leaves ~1e-5 of the weight)
+    assert -state.contacts.t_n.sum() == pytest.approx(weight + 1e4, rel=1e-5)
+    assert sim.settling.steps >= 2 and sim.settling.last_move < 1e-7
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_the_moving_base_from_a_settled_start(solver):
+    """The block on a shaken table: the table stands still while the block settles, and the
+    slip then follows the analytical one as closely as from rest (within 1%)."""
+    scene, base, block = moving_base(amplitude=G, freq=2.0)
+    scene.set_joint(JointMaterial("auto", "auto", CoulombSingle(36.4)))
+    sim = dda.Simulation(scene, dt="auto", solver=solver, start="settled")
+    x0 = sim.model.x_initial.copy()
+    sim.settle()
+    table = sim.model.topo.block == base.index
+    np.testing.assert_array_equal(sim.state.x[table], x0[table])
+    result = sim.run(1.0, progress=False)
+    times, ref = _moving_base_reference(1.0, 36.4, G, 2.0)
+    slip = relative_slip(result, base, block)
+    error = np.abs(slip - np.interp(result.time, times, ref)).max() / np.abs(ref).max()
+    assert error < 0.01  # measured 0.14% (Newton), 0.09% (legacy): as from rest
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_the_cut_slope_settles_under_either_solver(solver):
+    """The 311 blocks of ``examples/jointed_slope.py``: its many contacts that close and open
+    at round-off stalled Newton's static steps with every joint held (2.4e-5 of the forces,
+    at every step size down to 1e-5 s); the settle takes legacy DDA's steps whatever the
+    run's solver."""
+    spec = importlib.util.spec_from_file_location(
+        "jointed_slope", Path(__file__).parents[1] / "examples" / "jointed_slope.py")
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    scene, _, _ = example.build_scene()
+    sim = dda.Simulation(scene, dt=2e-3, solver=solver, max_open_close=30, start="settled")
+    settling = sim.settle()
+    assert settling.steps <= 20 and settling.cuts == 0  # measured 11 steps, no cut
+    assert settling.dt == pytest.approx(0.0191, rel=1e-2)
+    assert 1e-4 < settling.largest < 1e-3  # measured 0.52 mm, a block near the crest
+
+
+def test_the_arguments_are_checked():
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-2, -1), (3, -1), (3, 0), (-2, 0)], ROCK, fixed=True)
+    scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], ROCK)
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(30.0)))
+    with pytest.raises(ValueError, match="start must be 'rest' or 'settled'"):
+        dda.Simulation(scene, dt=1e-3, start="settle")
+    with pytest.raises(ValueError, match="for a dynamic analysis"):
+        dda.Simulation(scene, dt=1e-3, analysis="static", start="settled")
+    sim = dda.Simulation(scene, dt=1e-3, start="settled")
+    sim.settle()
+    with pytest.raises(ValueError, match="once"):
+        sim.settle()
+    moved = dda.Simulation(scene, dt=1e-3)
+    moved.run(0.002, progress=False)
+    with pytest.raises(ValueError, match="only a run's start"):
+        moved.settle()
+
+
+def test_a_settled_run_resumes_from_its_checkpoint(tmp_path):
+    """A checkpoint keeps the start and how it settled; the resumed run does not settle
+    again and goes on with the same numbers."""
+    def make():
+        sim, _, _ = _incline("settled", "newton", dt=5e-3)
+        return sim
+
+    whole = make()
+    whole.run(0.1, progress=False)
+    first = make()
+    path = tmp_path / "run.ckpt"
+    first.run(0.05, progress=False, checkpoint=path)
+    resumed = dda.Simulation.resume(path)
+    assert resumed.start == "settled" and resumed.settling == first.settling
+    resumed.run(0.05, progress=False)
+    np.testing.assert_allclose(resumed.state.x, whole.state.x, rtol=0, atol=1e-12)
+
+
+SCENE = """
+[materials.rock]
+young = 1e10
+poisson = 0.2
+density = 2000.0
+
+[[blocks]]
+name = "floor"
+material = "rock"
+vertices = [[-2, -1], [3, -1], [3, 0], [-2, 0]]
+fixed = true
+
+[[blocks]]
+name = "block"
+material = "rock"
+vertices = [[0, 0], [1, 0], [1, 1], [0, 1]]
+
+[joints.default]
+normal_penalty = 1e9
+shear_penalty = 1e9
+friction = { law = "coulomb", phi = 30.0 }
+
+[simulation]
+dt = 1e-3
+duration = 0.01
+start = "%s"
+"""
+
+
+def test_a_scene_file_asks_for_a_settled_start(tmp_path):
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE % "settled")
+    sim = dda.load_scene(path).simulation()
+    assert sim.start == "settled"
+    sim.run(0.01, progress=False)
+    assert sim.settling is not None
+    path.write_text(SCENE % "settle")
+    with pytest.raises(dda.io.scene_file.SceneFileError, match="start"):
+        dda.load_scene(path)
+
+
+def test_dda_run_and_info_say_the_start_is_settled(tmp_path, capsys):
+    from dda.cli import main
+
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE % "settled")
+    assert main(["info", str(path)]) == 0
+    assert "start      settled" in capsys.readouterr().out
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--no-progress"]) == 0
+    assert "start: settled in" in capsys.readouterr().out
+
+
+def test_the_held_law_sticks_with_its_tangent():
+    """It never slips, its tangent is the finite difference of its force, its history the
+    held law's."""
+    law = HeldFriction(CoulombSingle(30.0))
+    assert law.history_fields() == CoulombSingle(30.0).history_fields()
+    dg = np.array([1e-3, -2e-3, 0.0])
+    args = (np.full(3, -1.0), np.full(3, 1e9), np.ones(3))
+    trial = law.return_map(law.initial_state(3), dg, *args)
+    np.testing.assert_array_equal(trial.t_s, [1e6, -2e6, 0.0])  # far above mu |t_n|
+    assert not trial.slipping.any()
+    h = 1e-9
+    moved = law.return_map(law.initial_state(3), dg + h, *args)
+    dts_dgs, dts_dgn = law.tangent(trial, np.full(3, 1e10), np.full(3, 1e9))
+    np.testing.assert_allclose((moved.t_s - trial.t_s) / h, dts_dgs, rtol=1e-6)
+    np.testing.assert_array_equal(dts_dgn, 0.0)
