@@ -135,10 +135,15 @@ class WorkLedger:
     Parameters
     ----------
     sim : dda.Simulation
-        Measured from its committed state when the ledger is made.
+        Measured from its committed state when the ledger is made; a simulation that is to
+        start settled (``start="settled"``) and has not yet is settled first
+        (:meth:`dda.Simulation.settle`), so that the settle's own work is not counted.
     """
 
     def __init__(self, sim):
+        if getattr(sim, "start", "rest") == "settled" and sim.settling is None \
+                and sim.committed.time == 0.0 and not sim.control.steps:
+            sim.settle()
         from dda.recorder import pair_forces  # noqa: PLC0415 (the recorder imports much)
 
         self._pair_forces = pair_forces

@@ -122,8 +122,8 @@ class Simulation:
         loads switched on at t = 0 over contact springs that carry nothing yet, so the blocks
         drop onto their springs and bounce ("A dynamic run's start" in the README).
         "settled": the first :meth:`run` first brings the scene to rest under its loads at
-        t = 0 with the joints' friction held, by static steps, then runs from there with the
-        joints' own friction (:mod:`dda.settling`; :meth:`settle`). Only for a dynamic
+        t = 0 by static steps, first with the joints' friction held, then with their own,
+        and runs from there (:mod:`dda.settling`; :meth:`settle`). Only for a dynamic
         analysis (a static one settles by its own steps).
 
     Attributes
@@ -372,9 +372,10 @@ class Simulation:
         return result
 
     def settle(self, dt: float | None = None) -> Settling:
-        """Bring the run's start to rest under its loads at t = 0 with the joints' friction
-        held (:func:`dda.settling.settle`): the committed state becomes the settled one, at
-        t = 0 with the blocks' given velocities, and :attr:`settling` says how it went.
+        """Bring the run's start to rest under its loads at t = 0 (:func:`dda.settling.settle`:
+        static steps with the joints' friction held, then with their own): the committed
+        state becomes the settled one, at t = 0 with the blocks' given velocities,
+        :attr:`settling` says how it went and :attr:`start` becomes "settled".
 
         ``run`` calls it first under ``start="settled"``; call it yourself to look at the
         settled state before a run. ``dt`` is the static step (default: rule 9's,
@@ -398,6 +399,7 @@ class Simulation:
         with blas_threads():
             self.committed, self.settling = settle(self.model, self.committed, self.settings,
                                                    dt)
+        self.start = "settled"
         return self.settling
 
     def _stop_recording(self, recorder) -> None:

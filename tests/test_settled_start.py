@@ -64,9 +64,9 @@ def test_a_block_let_go_on_a_plane_slides_without_the_start_up_bounce(solver):
     if solver == "newton":
         assert abs(settled) < 5e-5  # measured -7.2e-8
     else:
-        assert -0.06 < settled < 0  # measured -4.91%
+        assert -0.06 < settled < 0  # measured -4.87%
         half, _ = _slide_error("settled", solver, dt=sim.dt / 2)
-        assert settled / half == pytest.approx(2.0, rel=0.1)  # -2.50%: first order
+        assert settled / half == pytest.approx(2.0, rel=0.1)  # -2.48%: first order
 
 
 @pytest.mark.parametrize("solver", ["newton", "legacy"])
@@ -142,7 +142,7 @@ def test_a_voussoir_arch_just_above_its_limit_stands_settled(solver):
     assert outcomes["rest"][-1] < -2e-3
     settled = outcomes["settled"]
     assert settled[0] < 0  # the static sag, 0.177 mm
-    assert np.abs(settled - settled[0]).max() < 1e-5  # measured 1.6e-6 m
+    assert np.abs(settled - settled[0]).max() < 1e-6  # measured 0.9 nm (Newton), 2.2 nm
 
 
 def test_an_arch_below_its_limit_does_not_settle():
@@ -213,9 +213,140 @@ def test_the_cut_slope_settles_under_either_solver(solver):
     scene, _, _ = example.build_scene()
     sim = dda.Simulation(scene, dt=2e-3, solver=solver, max_open_close=30, start="settled")
     settling = sim.settle()
-    assert settling.steps <= 20 and settling.cuts == 0  # measured 11 steps, no cut
+    assert settling.steps <= 20  # measured 11, no cut
+    # with the joints' own friction some blocks slide off the walls they hung on while held,
+    # and come to rest again: measured 39 steps (34 cut), 0.45 mm at most
+    assert settling.released and settling.release_steps <= 60
     assert settling.dt == pytest.approx(0.0191, rel=1e-2)
-    assert 1e-4 < settling.largest < 1e-3  # measured 0.52 mm, a block near the crest
+    assert 1e-4 < settling.largest < 1e-3  # measured 0.59 mm, a block near the crest
+
+
+def _slot(joint=(1e9, 1e9)):
+    """Two 1 m blocks side by side in a slot between fixed walls that touch them without
+    pressing, on a floor (friction 30 degrees)."""
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-2, -1), (4, -1), (4, 0), (-2, 0)], ROCK, fixed=True, name="floor")
+    scene.add_block([(-1, 0), (0, 0), (0, 3), (-1, 3)], ROCK, fixed=True, name="left wall")
+    scene.add_block([(2, 0), (3, 0), (3, 3), (2, 3)], ROCK, fixed=True, name="right wall")
+    scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], ROCK)
+    scene.add_block([(1, 0), (2, 0), (2, 1), (1, 1)], ROCK)
+    scene.set_joint(JointMaterial(*joint, CoulombSingle(30.0)))
+    return scene
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_blocks_in_a_slot_do_not_hang_on_its_walls(solver):
+    """Held, the walls' contacts took 30% of the blocks' weight in shear with no normal force
+    to carry it (a review, 2026-12-07): the floor carried 0.70 of it and the blocks jolted at
+    t = 0. After the held steps, static steps with the joints' own friction let them slide
+    down the walls: the floor carries the weight but what the walls' friction holds, as in a
+    run from rest."""
+    sim = dda.Simulation(_slot(), dt=1e-3, solver=solver, start="settled")
+    settling = sim.settle()
+    assert settling.released  # measured 2 steps with their own friction
+    c = sim.state.contacts
+    weight = 2 * ROCK.density * G
+    on_floor = np.minimum(c.bj, c.bk) == 0
+    strength = np.tan(np.radians(30.0)) * np.maximum(-c.t_n, 0.0)
+    assert np.all(np.abs(c.t_s) <= strength * (1 + 1e-9) + 1e-6)
+    # the rest on the walls' friction, within its strength (0.9941 from rest too)
+    assert -c.t_n[on_floor].sum() > 0.99 * weight  # measured 0.9941 (held: 0.70)
+    speeds = []
+    sim.run(0.1, progress=False, callback=lambda state, report:
+            speeds.append(np.abs(state.velocity[:, :2]).max()))
+    assert max(speeds) < 1e-5  # measured 1.4e-7 m/s (1.1e-3 held; 4.4e-3 from rest)
+
+
+def test_a_block_that_static_friction_holds_stands():
+    """The transition law with the onset judged contact by contact (static 25, dynamic 15
+    degrees), a 0.5 x 1 m block on a 24 degree plane: a rigid block stands. From rest the
+    start-up bounce trips the uphill contact into dynamic friction and the block slides off
+    (71 mm in 0.3 s); settled it stands."""
+    from dda.contact import StaticDynamicTransition
+
+    slides = {}
+    for start in ("rest", "settled"):
+        a = math.radians(24.0)
+        c, s = math.cos(a), math.sin(a)
+
+        def rot(points, c=c, s=s):
+            return [(c * x - s * y, s * x + c * y) for x, y in points]
+
+        scene = dda.Scene(gravity=G)
+        scene.add_block(rot([(-2, -0.5), (4, -0.5), (4, 0), (-2, 0)]), ROCK, fixed=True)
+        block = scene.add_block(rot([(0, 0), (0.5, 0), (0.5, 1.0), (0, 1.0)]), ROCK)
+        law = StaticDynamicTransition(25.0, 15.0, onset="contact")
+        scene.set_joint(JointMaterial("auto", "auto", law))
+        sim = dda.Simulation(scene, dt=1e-3, start=start)
+        d = sim.run(0.3, progress=False).displacement(block) @ np.array([c, s])
+        slides[start] = abs(d[-1] - d[0])
+    assert slides["rest"] > 0.05  # measured 71 mm
+    assert slides["settled"] < 1e-6  # measured 2e-11 m
+
+
+def test_legacy_dda_judges_the_settled_contacts_in_the_first_step():
+    """A floor moved from t = 0 at 0.126 m/s (u = 0.01 sin 4 pi t) under a block: legacy
+    DDA keeps a contact that starts a step sticking stuck to the step's end, and the settled
+    contact dragged the block to the floor's speed in the first step (0.06 mm of slip in
+    0.5 s where Newton and a start from rest give 1.07). The settled contacts start the run
+    marked sliding: each gets its law's check in the first step."""
+    slips = {}
+    for solver in ("newton", "legacy"):
+        scene = dda.Scene(gravity=G)
+        floor = scene.add_block([(-2, -1), (3, -1), (3, 0), (-2, 0)], ROCK)
+        block = scene.add_block([(0, 0), (1, 0), (1, 0.5), (0, 0.5)], ROCK)
+        scene.prescribe_motion(floor, lambda t: (0.01 * math.sin(4 * math.pi * t), 0.0))
+        scene.set_joint(JointMaterial(1e10, 1e10, CoulombSingle(36.4)))
+        sim = dda.Simulation(scene, dt=1e-3, solver=solver, start="settled")
+        result = sim.run(0.5, progress=False)
+        slip = result.displacement(block)[:, 0] - result.displacement(floor)[:, 0]
+        slips[solver] = slip[-1] - slip[0]
+    assert abs(slips["newton"]) > 1e-3  # measured -1.06 mm
+    assert slips["legacy"] == pytest.approx(slips["newton"], rel=0.02)  # measured 0.4%
+
+
+def test_soft_joints_settle_by_their_compression():
+    """A stack of ten 1 m blocks on joints of 1e6 N/m sinks 0.55 m on its springs (the joint
+    under k blocks carries k W on two springs): no mechanism, though the top block moves
+    more than a tenth of its size."""
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-1, -1), (2, -1), (2, 0), (-1, 0)], ROCK, fixed=True)
+    blocks = [scene.add_block([(0, k), (1, k), (1, k + 1), (0, k + 1)], ROCK)
+              for k in range(10)]
+    scene.set_joint(JointMaterial(1e6, 1e6, CoulombSingle(30.0)))
+    sim = dda.Simulation(scene, dt=1e-3, start="settled")
+    sim.settle()
+    weight = ROCK.density * G
+    springs = sum(k * weight / 2e6 for k in range(1, 11))  # 0.5505 m
+    top = sim.state.centroid[blocks[-1].index, 1] - sim.model.centroid_initial[
+        blocks[-1].index, 1]
+    assert -top == pytest.approx(springs, rel=1e-3)  # the blocks' own strain: 1e-5 of it
+
+
+def test_a_broken_bolt_is_named():
+    scene = dda.Scene(gravity=G)
+    roof = scene.add_block([(-2, 2), (3, 2), (3, 3), (-2, 3)], ROCK, fixed=True)
+    hanging = scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], ROCK, name="hanging")
+    scene.add_bolt(hanging, (0.5, 0.5), roof, (0.5, 2.5), stiffness=1e8,
+                   strength=0.5 * ROCK.density * G)
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(30.0)))
+    with pytest.raises(dda.SimulationError, match="1 bolt broke"):
+        dda.Simulation(scene, dt=1e-3, start="settled").settle()
+
+
+def test_a_ledger_made_before_the_run_starts_from_the_settled_state():
+    """The settle's own work is not the run's: a ledger made before ``run`` settles first."""
+    from dda.energy import WorkLedger
+
+    scene = dda.Scene(gravity=G)
+    scene.add_block([(-2, -1), (3, -1), (3, 0), (-2, 0)], ROCK, fixed=True)
+    scene.add_block([(0, 0), (1, 0), (1, 1), (0, 1)], ROCK)
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(30.0)))
+    sim = dda.Simulation(scene, dt=1e-3, start="settled")
+    ledger = WorkLedger(sim)
+    assert sim.settling is not None
+    sim.run(0.05, progress=False, callback=ledger)
+    assert abs(ledger.dissipated()) < 1e-6  # measured 7e-12 J/m (0.109 before)
 
 
 def test_the_arguments_are_checked():
@@ -235,6 +366,16 @@ def test_the_arguments_are_checked():
     moved.run(0.002, progress=False)
     with pytest.raises(ValueError, match="only a run's start"):
         moved.settle()
+    for bad in (0.0, -1.0, float("nan"), "auto"):
+        with pytest.raises(ValueError, match="Simulation.settle: dt must be"):
+            dda.Simulation(scene, dt=1e-3).settle(dt=bad)
+    # a step far below the static one leaves a block short of its weight after any few
+    # steps (0.0098 W at 1e-4 s): it does not pass for settled
+    with pytest.raises(dda.SimulationError, match="did not settle"):
+        dda.Simulation(scene, dt=1e-3).settle(dt=1e-4)
+    plain = dda.Simulation(scene, dt=1e-3)
+    plain.settle()
+    assert plain.start == "settled"  # what the result's attributes say
 
 
 def test_a_settled_run_resumes_from_its_checkpoint(tmp_path):

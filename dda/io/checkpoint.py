@@ -277,15 +277,10 @@ def _restore(header: dict, store: ArrayStore, path: Path, outside: bool) -> dict
         raise CheckpointError("simulation.locate_reversals: not true or false")
     settling = s["settling"]
     if settling is not None:
-        settling = _expect(settling, "simulation.settling",
-                           {f.name for f in fields(Settling)})
         try:
-            settling = Settling(int(settling["steps"]), float(settling["dt"]),
-                                float(settling["largest"]), str(settling["block"]),
-                                float(settling["last_move"]), int(settling["cuts"]))
-        except (TypeError, ValueError):
-            raise CheckpointError("simulation.settling: not steps, dt, moves and a block") \
-                from None
+            settling = Settling.from_data(settling)
+        except ValueError as exc:
+            raise CheckpointError(f"simulation.settling: {exc}") from None
     try:
         sim = Simulation(scene, dt=s["dt"], solver=_solver(s["solver"]),
                          analysis=s["analysis"], velocity_carry=s["velocity_carry"],
