@@ -199,8 +199,8 @@ def describe(loaded, budget: float = 2.0) -> str:
     lines += [("auto       " if k == 0 else "           ") + line
               for k, line in enumerate(sim.choices.splitlines())]
     if sim.start == "settled":
-        lines.append("start      settled: static steps at rest under the loads at t = 0, the "
-                     "joints' friction held (dda.settling; not timed below)")
+        lines.append("start      settled: static steps to rest under the loads at t = 0, the "
+                     "joints' friction held, then their own (dda.settling; not timed below)")
     if loaded.duration is not None:
         # a record that ends before the run: the run refuses it at once, and so does this
         for s in model.shakes:
