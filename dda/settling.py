@@ -18,10 +18,12 @@ blocks whose motion is given standing where they are at t = 0:
    311-block cut slope of ``examples/jointed_slope.py``: 582 of 1,481 contacts beyond their
    strength). A block that slides on instead (``RELEASE_MOVE`` of its size: one that its
    friction cannot hold, a block let go on a plane) is held where step 1 left it
-   (:func:`holding_model`) and the steps start again from step 1's state, up to
-   ``RELEASE_ROUNDS`` times. When they settle, their state is handed over; when they do
-   not, step 1's;
-3. the held blocks' pairs whose shear is beyond a contact's strength share it over their
+   (:func:`holding_model`), with those ``ON_THE_WAY`` of the way there, and the steps start
+   again from step 1's state, up to ``RELEASE_ROUNDS`` times. A rest found at a long step
+   is tried at one ``CONFIRM_FACTOR`` times shorter (friction's explicit lag can hold a
+   state at the long step that shorter ones move). When the steps settle, their state is
+   handed over; when they do not, step 1's, with a warning;
+3. the held blocks' faces whose shear is beyond a contact's strength share it over their
    contacts by strength (:func:`share_by_strength`): at t = 0 every contact of a face that
    is let go is at its limit, as a sliding face is.
 
@@ -52,6 +54,7 @@ static steps as time (a rate or ageing law's own clock, if it keeps one).
 from __future__ import annotations
 
 import copy
+import warnings
 from dataclasses import MISSING, dataclass, fields, replace
 
 import numpy as np
@@ -65,6 +68,7 @@ from dda.contact.friction import FrictionLaw, FrictionTrial
 from dda.contact.kinematics import contact_geometry, tributary_length
 from dda.errors import SimulationError
 from dda.model import Model
+from dda.plausibility import PlausibilityWarning
 from dda.solvers.legacy import LegacyPullBack
 from dda.step import StepSettings, StepState, step
 
@@ -86,10 +90,14 @@ RELEASE_STEPS = 200
 #: ... which give up once a block has moved this fraction of its size: it slides on
 RELEASE_MOVE = 0.01
 #: rounds of those steps, each holding the blocks the rounds before found sliding on
-RELEASE_ROUNDS = 3
-#: a rest found is confirmed by steps this many times shorter, this many times over
+RELEASE_ROUNDS = 8
+#: ... and with a block past ``RELEASE_MOVE`` those past this share of it are held too
+ON_THE_WAY = 0.25
+
+#: a rest found is tried at a step this many times shorter, up to this many times (a try
+#: that moves goes on, the step growing back)
 CONFIRM_FACTOR = 10.0
-CONFIRMATIONS = 1
+CONFIRMATIONS = 3
 #: accepted steps in a row before a cut step doubles again
 GROW_AFTER = 2
 #: OPEN-CLOSE passes a static step of the settle may take (at least)
@@ -156,6 +164,8 @@ class Settling:
     bolts_broken : bolts broken while settling
     held_blocks : free blocks handed over held (those that slid on with their own friction;
         every free block when the state handed over is the held one)
+    unsettled : why the steps with the joints' own friction did not come to rest, when they
+        did not ("" when they did)
     """
 
     steps: int
@@ -168,6 +178,7 @@ class Settling:
     released: bool = False
     bolts_broken: int = 0
     held_blocks: int = 0
+    unsettled: str = ""
 
     @classmethod
     def from_data(cls, data: dict) -> Settling:
@@ -202,8 +213,9 @@ class Settling:
             then = (f"then {self.release_steps} with their own friction: at rest with it "
                     "from t = 0")
         else:
-            then = (f"with their own friction blocks slid on ({self.release_steps} steps): "
-                    "the held state, its shear beyond the joints' strength let go at t = 0")
+            then = (f"with their own friction not at rest ({self.unsettled or 'blocks slid on'}"
+                    f", {self.release_steps} steps): the held state, its shear beyond the "
+                    "joints' strength let go at t = 0")
         moved = (f"the largest move {self.largest:.3g} m, of {self.block}" if self.largest > 0
                  else "nothing moved")
         broken = (f"; {self.bolts_broken} bolt{'s' if self.bolts_broken > 1 else ''} broke"
@@ -274,9 +286,10 @@ def holding_model(model: Model, hold: np.ndarray) -> Model:
 
 
 def share_by_strength(model: Model, state: StepState, dt: float) -> ContactSet:
-    """The contacts of ``state`` with each block pair's shear shared over its closed contacts
-    in proportion to their strengths where one of them is beyond its own: the pair's total
-    kept, ``t_s_i = (sum t_s) S_i / sum S`` and ``g_se = t_s / p_s``.
+    """The contacts of ``state`` with each face's shear shared over its closed contacts in
+    proportion to their strengths where one of them is beyond its own: the face's total
+    kept, ``t_s_i = (sum t_s) S_i / sum S`` and ``g_se = t_s / p_s`` (a face: a block pair's
+    contacts on one edge, :func:`dda.contact.faces.contact_faces`).
 
     Held, a pair's contacts share its shear by their springs (alike on a rigid block), not by
     their strengths: at t = 0 the one beyond its strength slid and the other held, and the
@@ -315,8 +328,13 @@ def share_by_strength(model: Model, state: StepState, dt: float) -> ContactSet:
     over = known & (np.abs(c.t_s) > strength * (1.0 + 1e-9))
     if not over.any():
         return c
+    # by face, not by block pair: a block in a channel touches one block on two faces whose
+    # shear runs opposite ways, and a pair's sum turned the floor's shear round (+14,980
+    # N/m against a strength of 1,515; a review, 2026-12-07)
+    faces = contact_faces(state.x, c.vertex, c.edge, topo.nxt, topo.prv).index
     keys = pair_key(c.bj, c.bk, model.n_blocks)
-    _, pair = np.unique(keys, return_inverse=True)
+    _, pair = np.unique(np.c_[keys, faces], axis=0, return_inverse=True)
+    pair = pair.reshape(-1)
     # a pair is shared when one of its contacts is over, and all of them are known
     pair_over = np.bincount(pair, weights=over, minlength=pair.max() + 1) > 0
     pair_unknown = np.bincount(pair, weights=closed & ~known, minlength=pair.max() + 1) > 0
@@ -357,7 +375,7 @@ def _static_steps(model: Model, steps_model: Model, state: StepState, dt0: float
     settled_move = SETTLED_MOVE * float(np.min(model.size[free]))
     run = _Run(state, False, dt=dt0)
     now, hint, cuts, moves, quiet = dt0, 0.0, 0, [], 0
-    top, confirms = dt0, 0  # the longest step tried now, and rests confirmed shorter
+    confirms, confirming = 0, False  # rests found at a long step and tried at a short one
     while run.steps < max_steps:
         trial, report = step(steps_model, run.state, now, solver, static, hint)
         if trial is None:
@@ -385,21 +403,28 @@ def _static_steps(model: Model, steps_model: Model, state: StepState, dt0: float
             # long (two columns of five blocks in a slot: the floor at 0.883 of their
             # weight, at rest at 0.319 s, 0.931 once the shorter steps had settled it)
             # (the held steps have no friction to lag: their rest needs no confirming)
-            if (mechanism or confirms >= CONFIRMATIONS
+            if (mechanism or confirming or confirms >= CONFIRMATIONS
                     or now < CONFIRM_FACTOR * dt_ref * 1e-3):
                 run.settled = True
                 return run
+            # (the step grows back from there: at the short step alone the slope's
+            # cuts took more than 200 steps to settle)
             confirms += 1
-            top = now = now / CONFIRM_FACTOR
-            quiet = 0
+            now, quiet, confirming = now / CONFIRM_FACTOR, 0, True
             continue
+        confirming = False
         if not mechanism:
             moved = np.hypot(*(trial.x - start).T)
-            far = moving & (moved > RELEASE_MOVE * model.size[model.topo.block])
-            if far.any():
+            size = model.size[model.topo.block]
+            far = moving & (moved > RELEASE_MOVE * size)
+            sliding = np.zeros(model.n_blocks, dtype=bool)
+            # (with a block past the mark, those on their way to it go too: each round
+            # starts again from the held state)
+            sliding[model.topo.block[moving & (moved > ON_THE_WAY * RELEASE_MOVE * size)
+                                     if far.any() else far]] = True
+            if sliding.any():
                 run.why = "blocks slide on"
-                run.sliding = np.zeros(model.n_blocks, dtype=bool)
-                run.sliding[model.topo.block[far]] = True
+                run.sliding = sliding
                 return run
         elif not _contracting(moves):
             moved = np.hypot(*(trial.x - start).T)
@@ -418,7 +443,7 @@ def _static_steps(model: Model, steps_model: Model, state: StepState, dt0: float
                     f"steps and goes on alike (a mechanism, or a block with nothing under "
                     f"it{also}); {_FROM_REST}")
         if quiet >= GROW_AFTER:  # (doubled after every step, every other try was refused)
-            now, quiet = min(2.0 * now, top), 0
+            now, quiet = min(2.0 * now, dt0), 0
     run.why = f"not settled in {max_steps} static steps"
     if mechanism:
         short = (f"; the static step, {dt0:.3g} s, is {dt0 / dt_ref:.2g} of rule 9's "
@@ -487,7 +512,15 @@ def settle(model: Model, state: StepState, settings: StepSettings,
                                                                  & ~hold).any():
             break
         hold |= released.sliding
+    else:
+        released.why = (f"{RELEASE_ROUNDS} rounds found blocks sliding on, the last "
+                        f"{int(np.count_nonzero(released.sliding & ~hold))} more")
     final = released if released.settled else held
+    if not released.settled:
+        warnings.warn(PlausibilityWarning(
+            f"start='settled': with the joints' own friction the scene did not come to rest "
+            f"({released.why}); the held state is handed over, and its shear beyond the "
+            "joints' strength is let go at t = 0 (a jolt, as from rest)"), stacklevel=3)
     if not released.settled:
         hold[:] = model.free
     contacts = share_by_strength(model, final.state, dt0)
@@ -500,7 +533,8 @@ def settle(model: Model, state: StepState, settings: StepSettings,
                       float(final.move), held.refused + released.refused,
                       release_steps, released.settled,
                       int(np.count_nonzero(final.state.bolt_broken)),
-                      int(np.count_nonzero(hold & model.free)))
+                      int(np.count_nonzero(hold & model.free)),
+                      "" if released.settled else released.why)
     # released at t = 0: every closed contact starts the run marked sliding, so that its law
     # judges it in the first step (legacy DDA's explicit rule keeps a contact that starts a
     # step sticking stuck to the step's end: a floor moved at 0.126 m/s from t = 0 dragged

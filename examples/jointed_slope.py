@@ -84,13 +84,13 @@ blocks 22.7 / 28.5 mm and 22.8 / 28.1 mm (median / most).
 
 ``--start settled`` starts the run from the slope at rest under gravity
 (``Simulation(start="settled")``, :mod:`dda.settling`): 11 static steps with the joints held,
-86 more with their own friction (some blocks slide off the back wall they hung on while
-held, 0.61 mm at most; the rest confirmed at a tenth of the step), some 4 s. From rest the
-blocks drop onto their springs and bounce. The 0.3 s then take legacy DDA 706 steps, 31 cut
-(from rest 990, 47 cut), and Newton 580, 23 cut (702, 27); the face blocks move 23.07 / 38.45
-mm and 21.85 / 38.57 mm (median / most; from rest 21.97 / 27.45 and 21.77 / 26.13): the
-median alike, the block that moves most 11-12 mm further under both solvers, as its
-contacts start at their friction limit (README, "A dynamic run's start").
+74 more with their own friction (some blocks slide off the back wall they hung on while
+held, 0.61 mm at most), some 4 s. From rest the blocks drop onto their springs and bounce.
+The 0.3 s then take legacy DDA 746 steps, 22 cut (from rest 990, 47 cut), and Newton 608,
+20 cut (702, 27); the face blocks move 21.84 / 38.87 mm and 21.76 / 38.67 mm (median / most;
+from rest 21.97 / 27.45 and 21.77 / 26.13): the median alike, the block that moves most 11-12
+mm further under both solvers, as its contacts start at their friction limit (README, "A
+dynamic run's start").
 
 Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` (a frame every 0.05 s of simulated time, and
 the run's end) and prints the blocks, how far the blocks of the face moved, and the cost

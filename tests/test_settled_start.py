@@ -231,10 +231,10 @@ def test_the_cut_slope_settles_under_either_solver(solver):
     settling = sim.settle()
     assert settling.steps <= 20  # measured 11, no cut
     # with the joints' own friction some blocks slide off the walls they hung on while held,
-    # and come to rest again, confirmed at a tenth of the step: measured 86 steps (22 cut)
+    # and come to rest again, confirmed at a tenth of the step: measured 74 steps (22 cut)
     assert settling.released and settling.held_blocks == 0
     assert settling.release_steps <= 150
-    assert settling.dt == pytest.approx(0.00191, rel=1e-2)
+    assert settling.dt <= 0.0192  # rule 9's step, 0.0191 s, or shorter
     assert 1e-4 < settling.largest < 1e-3  # measured 0.61 mm, a block near the crest
 
 
@@ -302,6 +302,74 @@ def test_a_sliding_block_does_not_keep_the_rest_of_the_scene_held(solver):
     assert (slide[-1] - slide[0]) / rigid - 1.0 == pytest.approx(0.0, abs=1e-3)
 
 
+def test_blocks_that_slide_on_at_different_paces_are_all_held():
+    """Four 1 x 0.5 m blocks on planes 0.3 to 10 degrees past their friction beside the
+    slot: the fast ones pass 1% of their size in a step or two while the slow ones have
+    moved a tenth of that, and three rounds did not find them all (a review: the whole scene
+    handed over held, the slot at 0.70 of its weight). Those a quarter of the way there go
+    with the first past it."""
+    scene = _slot()
+    blocks = []
+    for k, angle in enumerate((20.3, 21.0, 23.0, 30.0)):
+        a = math.radians(angle)
+        c, s = math.cos(a), math.sin(a)
+
+        def rot(points, c=c, s=s, x0=10.0 + 8.0 * k):
+            return [(x0 + c * x - s * y, s * x + c * y) for x, y in points]
+
+        plane = scene.add_block(rot([(-2, -0.5), (4, -0.5), (4, 0), (-2, 0)]), ROCK,
+                                fixed=True)
+        blocks.append((scene.add_block(rot([(0, 0), (1.0, 0), (1.0, 0.5), (0, 0.5)]), ROCK),
+                       c, s))
+        scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(20.0)), between=(plane,
+                                                                              blocks[-1][0]))
+    sim = dda.Simulation(scene, dt=1e-3, solver="legacy", start="settled")
+    settling = sim.settle()
+    assert settling.released and settling.held_blocks == 4
+    cs = sim.state.contacts
+    on_floor = np.minimum(cs.bj, cs.bk) == 0
+    assert -cs.t_n[on_floor].sum() > 0.99 * 2 * ROCK.density * G  # measured 0.9941
+    result = sim.run(0.3, progress=False)
+    for block, c, s in blocks:
+        slide = -(result.displacement(block) @ np.array([c, s]))
+        rigid = 0.5 * G * (s - c * math.tan(math.radians(20.0))) * result.time[-1] ** 2
+        assert (slide[-1] - slide[0]) / rigid - 1.0 == pytest.approx(0.0, abs=2e-3)
+
+
+@pytest.mark.parametrize("solver", ["newton", "legacy"])
+def test_a_block_in_a_channel_keeps_the_direction_of_each_faces_shear(solver):
+    """A 0.5 x 1 m block squeezed (12 kPa across) between the floor and the ceiling of a
+    channel cut in one fixed block, on 25 degrees (phi 10): it slides on and is handed over
+    held. Its two faces' shear runs opposite ways in the edges' frames; shared over the
+    pair, the floor's turned round (+14,980 N/m against a strength of 1,515) and the block
+    set off with a kick (+0.54% of slide in 0.3 s, Newton; a review). Shared face by face
+    it slides as the rigid block does."""
+    a = math.radians(25.0)
+    c, s = math.cos(a), math.sin(a)
+
+    def rot(points):
+        return [(c * x - s * y, s * x + c * y) for x, y in points]
+
+    scene = dda.Scene(gravity=G)
+    scene.add_block(rot([(-2, -0.5), (4, -0.5), (4, 1.5), (-2, 1.5), (-2, 1), (3, 1), (3, 0),
+                         (-2, 0)]), ROCK, fixed=True)
+    block = scene.add_block(rot([(0, 0), (0.5, 0), (0.5, 1), (0, 1)]), ROCK)
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(10.0)))
+    sigma = 12000.0  # across the channel
+    scene.set_initial_stress((-sigma * s * s, -sigma * c * c, sigma * s * c), blocks=[block])
+    sim = dda.Simulation(scene, dt=1e-3, solver=solver, start="settled")
+    assert sim.settle().held_blocks == 1
+    cs = sim.state.contacts
+    # the normal forces at the start give the friction; the block's weight drives it
+    result = sim.run(0.3, progress=False)
+    slide = -(result.displacement(block) @ np.array([c, s]))
+    normal = -cs.t_n[cs.state != 0].sum()  # both faces
+    mass = ROCK.density * 0.5
+    accel = G * s - math.tan(math.radians(10.0)) * normal / mass
+    rigid = 0.5 * accel * result.time[-1] ** 2
+    assert (slide[-1] - slide[0]) / rigid - 1.0 == pytest.approx(0.0, abs=1e-3)
+
+
 def test_a_rest_found_at_a_long_static_step_is_confirmed_at_a_short_one():
     """Two columns of five blocks in a slot: at rule 9's step (0.32 s) the steps with the
     joints' own friction came to a rest that friction's explicit lag held, the floor at
@@ -320,7 +388,7 @@ def test_a_rest_found_at_a_long_static_step_is_confirmed_at_a_short_one():
     speeds = []
     sim.run(0.1, progress=False, callback=lambda state, report:
             speeds.append(np.abs(state.velocity[:, :2]).max()))
-    assert max(speeds) < 1e-6  # measured 1.2e-8 m/s
+    assert max(speeds) < 1e-6  # measured 1.6e-9 m/s
 
 
 def test_a_block_that_static_friction_holds_stands():
@@ -413,6 +481,19 @@ def test_a_ledger_made_before_the_run_starts_from_the_settled_state():
     assert sim.settling is not None
     sim.run(0.05, progress=False, callback=ledger)
     assert abs(ledger.dissipated()) < 1e-6  # measured 7e-12 J/m (0.109 before)
+
+
+def test_a_held_hand_over_is_said_and_warned(monkeypatch):
+    """When the steps with the joints' own friction do not come to rest, the held state is
+    handed over: the run is told why, with a warning (a review: only ``released`` said
+    it, and "blocks slid on" where the step budget had run out)."""
+    import dda.settling
+
+    monkeypatch.setattr(dda.settling, "RELEASE_STEPS", 1)
+    sim = dda.Simulation(_slot(), dt=1e-3, start="settled")
+    with pytest.warns(dda.plausibility.PlausibilityWarning, match="not settled in 1 static"):
+        settling = sim.settle()
+    assert not settling.released and "not settled in 1 static steps" in settling.text
 
 
 def test_the_arguments_are_checked():
