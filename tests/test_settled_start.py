@@ -370,6 +370,69 @@ def test_a_block_in_a_channel_keeps_the_direction_of_each_faces_shear(solver):
     assert (slide[-1] - slide[0]) / rigid - 1.0 == pytest.approx(0.0, abs=1e-3)
 
 
+def _stop_scene(other: bool, slow: bool = False):
+    """A 1 x 0.5 m block 5 mm above a fixed stop on a 25 degree plane (phi 20); with
+    ``other`` a second block on a 30 degree plane 20 m away (20.005 degrees with ``slow``)."""
+    scene = dda.Scene(gravity=G)
+    a = math.radians(25.0)
+    c, s = math.cos(a), math.sin(a)
+
+    def rot(points, c=c, s=s, x0=0.0):
+        return [(c * x - s * y + x0, s * x + c * y) for x, y in points]
+
+    scene.add_block(rot([(-3, -0.5), (5, -0.5), (5, 0), (-3, 0)]), ROCK, fixed=True)
+    block = scene.add_block(rot([(0, 0), (1, 0), (1, 0.5), (0, 0.5)]), ROCK, name="B")
+    scene.add_block(rot([(-0.505, 0), (-0.005, 0), (-0.005, 0.5), (-0.505, 0.5)]), ROCK,
+                    fixed=True)
+    if other:
+        b = math.radians(20.005 if slow else 30.0)
+        c2, s2 = math.cos(b), math.sin(b)
+        scene.add_block(rot([(-2, -0.5), (5, -0.5), (5, 0), (-2, 0)], c2, s2, 20.0), ROCK,
+                        fixed=True)
+        scene.add_block(rot([(0, 0), (1, 0), (1, 0.5), (0, 0.5)], c2, s2, 20.0), ROCK)
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(20.0)))
+    return scene, block, np.array([c, s])
+
+
+@pytest.mark.parametrize("other", [False, True])
+def test_a_block_that_a_stop_holds_starts_at_the_stop(other):
+    """5 mm above a stop on a plane it slides on, the block starts the run at rest against
+    the stop. With another block sliding on elsewhere it was held at its place as well (it
+    had moved a quarter of the way to the 1% mark), let go there, and struck the stop at
+    0.086 m/s (a review): a block that has come to rest is not held."""
+    scene, block, along = _stop_scene(other)
+    sim = dda.Simulation(scene, dt=1e-3, solver="legacy", start="settled")
+    sim.settle()
+    speeds = []
+    result = sim.run(0.3, progress=False, callback=lambda state, report:
+                     speeds.append(np.abs(state.velocity[block.index, :2]).max()))
+    assert -(result.displacement(block)[0] @ along) == pytest.approx(0.005, abs=1e-4)
+    assert max(speeds) < 1e-5  # measured 1.2e-7 / 3.6e-8 m/s
+
+
+def test_a_block_that_slides_on_slowly_is_held_too():
+    """The slot beside a block 0.005 degrees past its friction: it neither comes to rest
+    nor moves 1% of its size in 200 static steps, and the whole scene went back to its held
+    state (the slot's floor at 0.70 of the weight; a review). Still moving alike at the
+    end of the steps, it is held and the rest settles."""
+    scene = _slot()
+    a = math.radians(20.005)
+    c, s = math.cos(a), math.sin(a)
+
+    def rot(points):
+        return [(10 + c * x - s * y, s * x + c * y) for x, y in points]
+
+    plane = scene.add_block(rot([(-2, -0.5), (4, -0.5), (4, 0), (-2, 0)]), ROCK, fixed=True)
+    block = scene.add_block(rot([(0, 0), (1, 0), (1, 0.5), (0, 0.5)]), ROCK)
+    scene.set_joint(JointMaterial(1e9, 1e9, CoulombSingle(20.0)), between=(plane, block))
+    sim = dda.Simulation(scene, dt=1e-3, solver="legacy", start="settled")
+    settling = sim.settle()
+    assert settling.released and settling.held_blocks == 1
+    cs = sim.state.contacts
+    on_floor = np.minimum(cs.bj, cs.bk) == 0
+    assert -cs.t_n[on_floor].sum() > 0.99 * 2 * ROCK.density * G  # measured 0.9941
+
+
 def test_a_rest_found_at_a_long_static_step_is_confirmed_at_a_short_one():
     """Two columns of five blocks in a slot: at rule 9's step (0.32 s) the steps with the
     joints' own friction came to a rest that friction's explicit lag held, the floor at
