@@ -92,7 +92,6 @@ RELEASE_STEPS = 200
 RELEASE_MOVE = 0.01
 #: rounds of those steps, each holding the blocks the rounds before found sliding on
 RELEASE_ROUNDS = 8
-
 #: a rest found is tried at a step this many times shorter, up to this many times (a try
 #: that moves goes on, the step growing back)
 CONFIRM_FACTOR = 10.0
@@ -527,11 +526,12 @@ def settle(model: Model, state: StepState, settings: StepSettings,
     # the joints' own friction, but held around the blocks that slide on with it (found
     # round by round, each round from the held state again)
     hold = np.zeros(model.n_blocks, dtype=bool)
-    release_steps = 0
+    release_steps, refused = 0, held.refused
     for _ in range(RELEASE_ROUNDS):
         released = _static_steps(model, holding_model(model, hold), held.state, dt0, dt_ref,
                                  static, RELEASE_STEPS, mechanism=False)
         release_steps += released.steps
+        refused += released.refused
         new = 0 if released.sliding is None else int(np.count_nonzero(released.sliding
                                                                        & ~hold))
         if released.settled or not new:
@@ -546,7 +546,6 @@ def settle(model: Model, state: StepState, settings: StepSettings,
             f"start='settled': with the joints' own friction the scene did not come to rest "
             f"({released.why}); the held state is handed over, and its shear beyond the "
             "joints' strength is let go at t = 0 (a jolt, as from rest)"), stacklevel=3)
-    if not released.settled:
         hold[:] = model.free
     contacts = share_by_strength(model, final.state, dt0)
     free = model.free
@@ -555,7 +554,7 @@ def settle(model: Model, state: StepState, settings: StepSettings,
     v = int(np.argmax(moved))
     record = Settling(held.steps, max(held.longest, released.longest), float(moved[v]),
                       model.block_label(model.topo.block[v]) if moved[v] > 0 else "",
-                      float(final.move), held.refused + released.refused,
+                      float(final.move), refused,
                       release_steps, released.settled,
                       int(np.count_nonzero(final.state.bolt_broken)),
                       int(np.count_nonzero(hold & model.free)),
