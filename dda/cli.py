@@ -34,10 +34,12 @@ from dda.io.vtu import VTUWriter
 __all__ = ["main"]
 
 
-def _run_scene(path, out, duration, progress, outside=False):
+def _run_scene(path, out, duration, progress, outside=False, start=None):
     from dda.io.scene_file import load_scene
 
     loaded = load_scene(path, allow_outside_output=outside)
+    if start is not None:  # --start overrides the file's [simulation] start
+        loaded.settings = {**loaded.settings, "start": start}
     if out is None and loaded.output_dir is None:
         out = Path("out") / Path(path).stem
     writer = loaded.writer(out)
@@ -88,7 +90,8 @@ def cmd_run(args):
     if path.suffix == ".py":
         given = [flag for flag, on in (("--duration", args.duration is not None),
                                        ("--no-progress", args.no_progress),
-                                       ("--allow-outside-output", args.allow_outside_output))
+                                       ("--allow-outside-output", args.allow_outside_output),
+                                       ("--start", args.start is not None))
                  if on]
         if given:  # (a script reads its own arguments; these would be dropped silently)
             raise SystemExit(
@@ -97,10 +100,13 @@ def cmd_run(args):
                 f"'python {path} ...' to give it its own options)")
         _run_script(path, args.out)
     elif path.suffix == ".ckpt":
+        if args.start is not None:
+            raise SystemExit("dda run: --start applies to a scene file; a checkpoint goes on "
+                             "from where its run stopped")
         _resume(path, args.duration, _progress(args), args.allow_outside_output)
     else:
         _run_scene(path, args.out, args.duration, _progress(args),
-                   args.allow_outside_output)
+                   args.allow_outside_output, args.start)
     return 0
 
 
@@ -374,6 +380,10 @@ def main(argv=None) -> int:
                    "the scene file's folder, or else out/NAME under the current folder)")
     p.add_argument("--duration", type=float, help="simulated time (s), overrides the file's")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--start", choices=["rest", "settled"], default=None,
+                   help="how a dynamic run starts, overrides the file's [simulation] start: "
+                   "rest (the loads switched on at t = 0) or settled (at rest under them "
+                   "first; dda.settling)")
     p.add_argument("--allow-outside-output", action="store_true",
                    help="let a scene file's [output] dir be absolute or climb out of the "
                    "file's folder with '..', and a resumed checkpoint write its VTU series "

@@ -654,6 +654,22 @@ def test_dda_run_and_info_say_the_start_is_settled(tmp_path, capsys):
     assert "start: settled in" in capsys.readouterr().out
 
 
+def test_dda_run_start_overrides_the_file(tmp_path, capsys):
+    from dda.cli import main
+
+    path = tmp_path / "scene.toml"
+    path.write_text(SCENE % "rest")
+    assert main(["run", str(path), "--out", str(tmp_path / "a"), "--no-progress"]) == 0
+    assert "start: settled" not in capsys.readouterr().out
+    assert main(["run", str(path), "--out", str(tmp_path / "b"), "--no-progress",
+                 "--start", "settled"]) == 0
+    assert "start: settled in" in capsys.readouterr().out
+    script = tmp_path / "s.py"
+    script.write_text("print('hi')\n")
+    with pytest.raises(SystemExit, match="--start applies to a scene file"):
+        main(["run", str(script), "--start", "settled"])
+
+
 def test_the_held_law_sticks_with_its_tangent():
     """It never slips, its tangent is the finite difference of its force, its history the
     held law's."""
