@@ -141,8 +141,7 @@ class WorkLedger:
     """
 
     def __init__(self, sim):
-        if getattr(sim, "start", "rest") == "settled" and sim.settling is None \
-                and sim.committed.time == 0.0 and not sim.control.steps:
+        if sim.settle_pending:
             sim.settle()
         from dda.recorder import pair_forces  # noqa: PLC0415 (the recorder imports much)
 

@@ -406,10 +406,11 @@ def _static_steps(model: Model, steps_model: Model, state: StepState, dt0: float
         run.state, run.steps, run.dt, cuts, quiet = trial, run.steps + 1, now, 0, quiet + 1
         run.longest = max(run.longest, now)
         run.move = trial.last_move
-        pace = np.zeros(model.n_blocks)
-        np.maximum.at(pace, model.topo.block, np.hypot(*(trial.x - previous).T))
-        paces = [paces[1], pace / now**2]
-        previous = trial.x
+        if not mechanism:  # (the held steps judge the whole scene's moves instead)
+            pace = np.zeros(model.n_blocks)
+            np.maximum.at(pace, model.topo.block, np.hypot(*(trial.x - previous).T))
+            paces = [paces[1], pace / now**2]
+            previous = trial.x
         moves.append(run.move / now**2)  # (the unbalanced force it stands for, per mass)
         if run.steps >= 2 and run.move <= settled_move * (now / dt_ref) ** 2:
             # a long static step is nearly a solve of the stiffness alone: a state that

@@ -323,8 +323,7 @@ class Simulation:
         """
         t_end, writer, checkpoint = self._prepare(duration, output, checkpoint,
                                                   checkpoint_every)
-        if (self.start == "settled" and self.settling is None
-                and self.committed.time == 0.0 and self.control.steps == 0):
+        if self.settle_pending:
             self.settle()
         result = Result(self.scene, [b.name for b in self.scene.blocks],
                         record_every=self.record_every, settings=self._run_settings(),
@@ -370,6 +369,13 @@ class Simulation:
                 if writer is not None:
                     writer.close()
         return result
+
+    @property
+    def settle_pending(self) -> bool:
+        """Whether the run is to start settled (``start="settled"``) and has not yet: the
+        first :meth:`run` (or a :class:`dda.energy.WorkLedger` made before it) settles it."""
+        return (self.start == "settled" and self.settling is None
+                and self.committed.time == 0.0 and not self.control.steps)
 
     def settle(self, dt: float | None = None) -> Settling:
         """Bring the run's start to rest under its loads at t = 0 (:func:`dda.settling.settle`:
