@@ -452,7 +452,7 @@ def contact_step_arguments(model, state, dt, solver, settings, d0, ints, k_eff, 
             float(newton_module.PREDICTOR_CONTRACTION), float(getattr(solver, "tol", 1.0)),
             newton_module.ROUND_OFF,
             newton_module.LINE_SEARCH_HALVINGS, newton_module.CYCLE_LENGTH,
-            bool(newton_module.REVERSED_STICK), rigid, faces,
+            bool(newton_module.REVERSED_STICK), *newton_module._hold_rule(), rigid, faces,
             _FACE_COS, bool(newton_module.NOISE_FLOOR)), pattern, sliding is not None
 
 

@@ -15,7 +15,8 @@ vectorized functions round some last bits otherwise, 990 steps, 47 cut, 21.97 / 
 ``dda.contact.detection``, which taken at every step sent this run, as stiff as it is for its
 dt, another way: 1,210 steps, 43 cut, 21.97 / 27.58 mm). ``--solver newton``: 801 steps, 21
 cut, 22.35 / 26.52 mm (77 s beside two other runs on two cores; 38 s for 656 steps in an
-earlier version, alone); on the AVX-512 machine 702 steps, 27 cut, 21.77 / 26.13 mm (31 s). The
+earlier version, alone); on the AVX-512 machine 713 steps, 29 cut, 22.11 / 27.60 mm (34 s;
+702, 27, 21.77 / 26.13 mm before Newton held contacts that cycle, 2026-12-07). The
 penalty is stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x 1.6 m block's
 contact period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the contacts settle only
 at a fraction of the 2e-3 s asked for and the steps average 2.9e-4 s; ``dda.PenaltyWarning``
@@ -87,10 +88,18 @@ blocks 22.7 / 28.5 mm and 22.8 / 28.1 mm (median / most).
 74 more with their own friction (some blocks slide off the back wall they hung on while
 held, 0.61 mm at most), some 4 s. From rest the blocks drop onto their springs and bounce.
 The 0.3 s then take legacy DDA 746 steps, 22 cut (from rest 990, 47 cut), and Newton 608,
-20 cut (702, 27); the face blocks move 21.84 / 38.87 mm and 21.76 / 38.67 mm (median / most;
-from rest 21.97 / 27.45 and 21.77 / 26.13): the median alike, the block that moves most 11-12
+20 cut (713, 29); the face blocks move 21.84 / 38.87 mm and 21.73 / 39.40 mm (median / most;
+from rest 21.97 / 27.45 and 22.11 / 27.60): the median alike, the block that moves most 11-12
 mm further under both solvers, as its contacts start at their friction limit (README, "A
 dynamic run's start").
+
+``--cohesion PA`` gives the joints a cohesion (``CoulombSingle(phi=35, cohesion=PA)``). At 1
+MPa the slope is glued: legacy DDA 2,087 steps, 86 cut, 31 s, the face blocks 0.44 / 0.80 mm;
+Newton 2,206 steps, 98 cut, 70 s, 0.40 / 0.75 mm (the two side by side on two cores). At 10
+kPa they move 9.56 / 10.62 mm (legacy, 1,424 steps, 44 cut) and 7.43 / 8.17 mm (Newton, 783
+steps, 32 cut). Newton runs these because it holds closed a contact that cycles between open
+and closed at a small pull (:data:`dda.solvers.newton.HOLD_CYCLING`): before, it stopped at t
+= 0.025 s at 1 MPa and took 14,903 steps for 0.1 s at 10 kPa.
 
 Writes ``OUT/slope_*.vtu`` + ``OUT/slope.pvd`` (a frame every 0.05 s of simulated time, and
 the run's end) and prints the blocks, how far the blocks of the face moved, and the cost
@@ -98,7 +107,7 @@ profile.
 
 Run:  python examples/jointed_slope.py [--out DIR] [--duration S] [--dt S | --dt auto]
                                        [--solver legacy|newton] [--auto] [--seed N]
-                                       [--start rest|settled]
+                                       [--start rest|settled] [--cohesion PA]
 """
 
 from __future__ import annotations
@@ -189,9 +198,16 @@ def main(argv=None):
                     help='the penalty and dt chosen by the simulation ("auto"; --dt is ignored)')
     ap.add_argument("--start", choices=["rest", "settled"], default="rest",
                     help="settled: at rest under gravity before the run (dda.settling)")
+    ap.add_argument("--cohesion", type=float, default=0.0,
+                    help="the joints' cohesion, Pa (default 0)")
     args = ap.parse_args(argv)
+    if not (np.isfinite(args.cohesion) and args.cohesion >= 0.0):
+        ap.error(f"--cohesion must be a finite number of Pa, 0 or more, got {args.cohesion}")
     out = Path(args.out)
     scene, base, blocks = build_scene(seed=args.seed)
+    if args.cohesion:
+        scene.set_joint(JointMaterial(JOINT.normal_penalty, JOINT.shear_penalty,
+                                      CoulombSingle(phi=35.0, cohesion=args.cohesion)))
     face = face_blocks(scene, blocks)
     print(f"{len(blocks)} blocks cut from the slope ({len(face)} on its face)")
     solver = make_solver(args.solver)

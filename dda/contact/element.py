@@ -485,7 +485,7 @@ class ContactElement:
         """The normal force a contact keeps at the step's end: its spring's ``p_n g_n`` where
         ``closed`` (``t_n``, the normal force with ``gap``, itself without a dashpot)."""
         if self.dashpot is None:
-            return t_n
+            return np.minimum(t_n, 0.0)
         return np.where(closed, np.minimum(self.normal_penalty * gap, 0.0), 0.0)
 
     def judged_gap(self, gap: np.ndarray) -> np.ndarray:
@@ -576,7 +576,7 @@ class ContactElement:
         rows[:, 1] = self.i_row
         return rows
 
-    def response(self, d: np.ndarray) -> ContactResponse:
+    def response(self, d: np.ndarray, held: np.ndarray | None = None) -> ContactResponse:
         """Contact forces and consistent tangent at the trial increments d (METHOD.md s. 3-4).
 
         The trial positions are ``X + T(X) d``. Per closed contact (g_n < 0), with the law's
@@ -593,12 +593,16 @@ class ContactElement:
         force is compressive (``g_n`` below :attr:`release`); the returned ``t_n`` is the
         spring's alone (what the next step starts from, the guard measures depth by and the
         energy counts).
+        The contacts of the mask ``held`` (m,) are closed whatever their gap (Newton's hold
+        of a contact that cycles, :data:`dda.solvers.newton.HOLD_CYCLING`): where the gap is
+        open their spring pulls, ``t_n = p_n g_n > 0``, their strength is the law's at zero
+        normal force (``k_sn = 0``), and the normal force they keep is ``min(p_n g_n, 0)``.
         Every trial starts from the committed history, so nothing here needs undoing.
         """
         with section("contact_element"):
-            return self._response(d)
+            return self._response(d, held)
 
-    def _response(self, d: np.ndarray) -> ContactResponse:
+    def _response(self, d: np.ndarray, held: np.ndarray | None = None) -> ContactResponse:
         dd = self.pair_increments(d)
         a1, a2, a3 = self.maps
         g = self.geometry
@@ -615,18 +619,24 @@ class ContactElement:
                     *self.kernel_laws, *kernel_history(self.contacts.history, len(self)),
                     kin.gap, kin.shear, as_float64(self.shear0), as_float64(self.release),
                     self.dashpot is not None, as_float64(kn), as_float64(self.normal_penalty),
-                    as_float64(ps), as_float64(self.length), kin.e_row, kin.i_row)
+                    as_float64(ps), as_float64(self.length), kin.e_row, kin.i_row,
+                    np.zeros(len(self), dtype=bool) if held is None else held)
             history = kernel_history_dict(self.contacts.history, g_se, slip, sliding)
         else:
             # the normal force (with an impact dashpot, the spring's and the dashpot's) on the
             # exact gap
             judged = self.judged_gap(kin.gap)
             closed = judged < 0.0
+            if held is not None:
+                closed = closed | held
             t_n = np.where(closed, kn * judged, 0.0)
             dgs = kin.shear - self.shear0
+            # a held contact's pull is no compression to its law (a law written with |t_n|
+            # would read it as one), and its strength does not change with g_n
             t_s, slipping, history, (kss, ksn) = self.laws.return_map(  # with the tangent
-                self.contacts.history, dgs, t_n, ps, self.length, where=closed,
-                normal_penalty=kn)
+                self.contacts.history, dgs, np.minimum(t_n, 0.0), ps, self.length,
+                where=closed, normal_penalty=kn)
+            ksn = np.where(t_n > 0.0, 0.0, ksn)
             slipping = slipping & closed
             residual = t_n[:, None] * kin.e_row + t_s[:, None] * kin.i_row
             spring = self.spring_force(closed, kin.gap, t_n)

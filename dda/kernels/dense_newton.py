@@ -195,8 +195,41 @@ def stalled(norm, last, before, contraction):
 
 
 @njit(cache=True)
+def _holding(closed, last_closed, flips, t_n, hold_tension, hold_after, kind, mu_s, mu_d,
+             cohesion, face, g_se, slip, sliding, gap, shear, shear0, release, has_dashpot, kn,
+             pn, ps, length, e_row, i_row, held):
+    """(m,) the contacts :func:`dense_newton` holds closed from this iterate on, and whether
+    that differs from ``held`` (:func:`dda.solvers.newton._hold_cycling`): those held that
+    pull by at most ``hold_tension`` of this iterate's largest normal force, and those closed
+    at the iterate before, open at this one, with ``hold_after`` opens or closes behind them,
+    that pull by at most that much when held with the others."""
+    m = closed.shape[0]
+    largest = 0.0
+    for c in range(m):
+        largest = max(largest, abs(t_n[c]))
+    limit = hold_tension * largest
+    kept = np.zeros(m, dtype=np.bool_)
+    opening = np.zeros(m, dtype=np.bool_)
+    changed = False
+    for c in range(m):
+        kept[c] = held[c] and t_n[c] <= limit
+        changed = changed or kept[c] != held[c]
+        opening[c] = last_closed[c] and not closed[c] and flips[c] >= hold_after
+    if not opening.any():
+        return kept, changed
+    trial = contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, gap, shear,
+                             shear0, release, has_dashpot, kn, pn, ps, length, e_row, i_row,
+                             kept | opening)[9]
+    for c in range(m):
+        if opening[c] and trial[c] <= limit:
+            kept[c] = True
+            changed = True
+    return kept, changed
+
+
+@njit(cache=True)
 def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, reversed_stick,
-                 contraction,
+                 contraction, hold_tension, hold_after,
                  block_k, block_f, free, rigid, n, block_base, block_step, free_blocks,
                  pair_base, pair_step, side_row, side_block, keep, reduced, bj, bk, p1, p2, p3,
                  a1, a2, a3, xi0, shear0, release, has_dashpot, kn, pn, ps, length, kind, mu_s,
@@ -213,6 +246,10 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
     contraction : when > 0, the iteration gives up (STALLED) at an iterate that has not
         converged when neither it nor the accepted iterate before brought |R| below this
         fraction of the one before it (:meth:`dda.solvers.NewtonRaphson.iterate`)
+    hold_tension, hold_after : a contact that has opened or closed ``hold_after`` times in
+        the step's iterates and would open again, pulled by at most ``hold_tension`` of the
+        largest normal force, is held closed while it pulls no harder
+        (:data:`dda.solvers.newton.HOLD_CYCLING`); ``hold_tension`` negative: none is
     block_k, block_f, free, rigid : the step's block matrices and forces, the blocks with
         unknowns, the blocks without strain unknowns
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
@@ -266,6 +303,9 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
     it = 0
     scale = 1.0
     status = CONVERGED
+    held = np.zeros(m, dtype=np.bool_)
+    flips = np.zeros(m, dtype=np.int64)
+    last_closed = np.zeros(m, dtype=np.bool_)
     for it in range(max_iter + 1):
         dd = pair_increments(d, bj, bk)
         q1, q2, q3 = _moved(p1, a1, dd), _moved(p2, a2, dd), _moved(p3, a3, dd)
@@ -274,7 +314,24 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
         (closed, slipping, spring, t_s, g_out, slip_out, sliding_out, kss, ksn, t_n,
          residual) = contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding,
                                       gap, shear, shear0, release, has_dashpot, kn, pn, ps,
-                                      length, e_row, i_row)
+                                      length, e_row, i_row, held)
+        if hold_tension >= 0.0 and it > 0:
+            held, changed = _holding(closed, last_closed, flips, t_n, hold_tension, hold_after,
+                                     kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding,
+                                     gap, shear, shear0, release, has_dashpot, kn, pn, ps,
+                                     length, e_row, i_row, held)
+            if changed:
+                (closed, slipping, spring, t_s, g_out, slip_out, sliding_out, kss, ksn, t_n,
+                 residual) = contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip,
+                                              sliding, gap, shear, shear0, release,
+                                              has_dashpot, kn, pn, ps, length, e_row, i_row,
+                                              held)
+        if hold_tension >= 0.0:
+            if it > 0:
+                for c in range(m):
+                    if closed[c] != last_closed[c]:
+                        flips[c] += 1
+            last_closed = closed.copy()
         block_r, r_free, inertia_free, contact_free = newton_residuals(
             block_k, d, block_f, free, rigid, bj, bk, residual)
         norm = _norm(r_free)
@@ -356,7 +413,9 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
 def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patience,
                       retry_patience, unsettled, max_iter, predictor_iterations,
                       predictor_contraction, tol, round_off,
-                      halvings_allowed, cycle_length, reversed_stick, block_k, block_f, d_known,
+                      halvings_allowed, cycle_length, reversed_stick, hold_tension, hold_after,
+                      block_k,
+                      block_f, d_known,
                       n, block_base,
                       block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
                       reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length,
@@ -422,7 +481,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
         contraction = predictor_contraction if looser else 0.0
         (status, it, d, norms, scale, closed, slipping, spring, t_s, g_se, slip,
          sliding) = dense_newton(d, limit, tol, round_off, halvings_allowed, cycle_length,
-                                 reversed_stick, contraction,
+                                 reversed_stick, contraction, hold_tension, hold_after,
                                  block_k, block_f, free, rigid, n, block_base, block_step,
                                  free_blocks, pair_base, pair_step, side_row, side_block, keep,
                                  reduced, bj, bk, p1, p2, p3, a1, a2, a3, xi0, shear0, release,

@@ -213,13 +213,14 @@ def law_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n
 
 @njit(cache=True)
 def contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, gap, shear, shear0,
-                     release, has_dashpot, kn, pn, ps, length, e_row, i_row):
+                     release, has_dashpot, kn, pn, ps, length, e_row, i_row, held):
     """The fully implicit method's contact response around the return map
     (:meth:`dda.contact.ContactElement.response`), element by element as its numpy
     expressions: the judged gap ``g_n - release`` (``g_n`` without a dashpot), closed where
     negative, its normal force ``k_n`` times it, the shear increment ``g_s - g_s0``,
     :func:`law_response` on the closed contacts, the residual rows ``t_n E + t_s I`` and the
-    spring's own force ``min(p_n g_n, 0)`` (the normal force itself without a dashpot).
+    spring's own force ``min(p_n g_n, 0)``. The contacts of ``held`` are closed whatever the
+    gap (a pull ``k_n g > 0`` where it is open, and no normal-shear coupling there).
 
     Returns ``(closed, slipping and closed, spring force, t_s, g_se, slip, sliding,
     dt_s/dg_s, dt_s/dg_n, t_n, residual)``."""
@@ -229,11 +230,14 @@ def contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, gap,
     dgs = np.empty(m)
     for i in range(m):
         judged = gap[i] - release[i] if has_dashpot else gap[i]
-        closed[i] = judged < 0.0
+        closed[i] = judged < 0.0 or held[i]
         t_n[i] = kn[i] * judged if closed[i] else 0.0
         dgs[i] = shear[i] - shear0[i]
     t_s, slipping, g_out, slip_out, sliding_out, kss, ksn = law_response(
         kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, dgs, t_n, ps, kn, length, closed)
+    for i in range(m):
+        if t_n[i] > 0.0:  # a held contact in tension: its strength does not change with g_n
+            ksn[i] = 0.0
     residual = np.empty((m, e_row.shape[1]))
     spring = np.empty(m)
     slipping_closed = np.empty(m, dtype=np.bool_)
@@ -243,7 +247,7 @@ def contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, gap,
         if has_dashpot:
             spring[i] = _np_min(pn[i] * gap[i], 0.0) if closed[i] else 0.0
         else:
-            spring[i] = t_n[i]
+            spring[i] = _np_min(t_n[i], 0.0)
         slipping_closed[i] = slipping[i] and closed[i]
     return (closed, slipping_closed, spring, t_s, g_out, slip_out, sliding_out, kss, ksn, t_n,
             residual)

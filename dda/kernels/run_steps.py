@@ -71,7 +71,7 @@ def run_steps(max_steps, velocity, s_centroid, last_move, untracked, time,
               pair_base, pair_step, side_row, side_block, keep, reduced, terms, gap_rel,
               gap_abs, max_passes, band, rules, unsettled, max_iter, predictor_iterations,
               predictor_contraction, tol, round_off, halvings, cycle_length, reversed_stick,
-              rigid, faces, face_cos, noise_floor):
+              hold_tension, hold_after, rigid, faces, face_cos, noise_floor):
     """Up to ``max_steps`` steps of ``dt`` from the committed state (module docstring).
 
     The arguments from ``newton`` on are :func:`contact_step`'s for the first step (those
@@ -175,7 +175,8 @@ def run_steps(max_steps, velocity, s_centroid, last_move, untracked, time,
             block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
             reduced, terms, gap_rel, gap_abs, max_passes, band, rules, unsettled, max_iter,
             predictor_iterations, predictor_contraction, tol, round_off, halvings,
-            cycle_length, reversed_stick, rigid, faces, face_cos, noise_floor)
+            cycle_length, reversed_stick, hold_tension, hold_after, rigid, faces, face_cos,
+            noise_floor)
         if status != OK:
             why = NOT_OK
             break

@@ -62,8 +62,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
                  pair_base, pair_step, side_row, side_block, keep, reduced, terms, gap_rel,
                  gap_abs, max_passes, band, rules, unsettled, max_iter, predictor_iterations,
                  predictor_contraction, tol, round_off, halvings, cycle_length, reversed_stick,
-                 rigid, faces,
-                 face_cos, noise_floor):
+                 hold_tension, hold_after, rigid, faces, face_cos, noise_floor):
     """One step's contacts, solve, moves and guard (module docstring).
 
     ``law`` is ``(kind, mu_static, mu_dynamic, cohesion)`` of the scene's one law, ``init``
@@ -197,9 +196,9 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
          g_se_out, slip_out, sliding_out, solves) = newton_dense_step(
             max_passes, rtol, floor, cycle_tension, relax_after, patience, retry_patience,
             unsettled, max_iter, predictor_iterations, predictor_contraction, tol, round_off,
-            halvings, cycle_length, reversed_stick, block_k, block_f, d_known, n, block_base,
-            block_step,
-            free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows, terms,
+            halvings, cycle_length, reversed_stick, hold_tension, hold_after, block_k, block_f,
+            d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
+            side_block, keep, reduced, rows, terms,
             bj, bk, free, e_row, i_row, gap, pn, ps_step, judge, length, has_dashpot, dashpot,
             reference, release, kind, mu_s, mu_d, cohesion, face, state0, g_se, slip, sliding,
             t_n0, gap_tol, rigid, p1, p2, p3, maps[0], maps[1], maps[2], xi0, shear0,
