@@ -495,7 +495,7 @@ cores. Without the hold, Newton stopped ("cannot go on") at t = 0.025 s with 1 M
 CPU) and at 0.020 s with 0.1 MPa, and took 14,903 steps for 0.1 s with 10 kPa: in the failing
 steps one contact, at a normal force of 0.1 to 1 N/m and a shear force of 2.4e5 to 2.6e5 N/m
 (of its 5e5), opened and closed 10 to 14 times in 25 iterations. With it, 1 MPa: 2,206
-steps, 98 cut, 63 s (legacy DDA: 2,087, 86, 30 s); 0.1 MPa: 2,830 steps, 96 cut, 89 s
+steps, 98 cut, 70 s (legacy DDA: 2,087, 86, 31 s); 0.1 MPa: 2,830 steps, 96 cut, 89 s
 (legacy 1,588, 60, 28 s); the face blocks moved 0.40 / 0.75 and 0.40 / 0.64 mm (median /
 most; legacy 0.44 / 0.80 and 0.35 / 0.58 mm). Without cohesion the example took 713 steps,
 29 cut, 22.11 / 27.60 mm, against 702, 27, 21.77 / 26.13 without the hold (the shaken slope
