@@ -72,6 +72,10 @@ def test_an_iterate_gives_the_composed_residuals_from_a_perturbed_start(monkeypa
     and they end on the same contacts."""
     problem, d = _problem_and_start(monkeypatch)
     monkeypatch.setattr(newton, "REVERSED_STICK", reversed_stick)
+    # the counts were measured without the hold of cycling contacts (with it, the variant
+    # without the stick branch ends its 25 iterations at |R| 175 N, both paths alike:
+    # tests/test_cohesive_newton.py)
+    monkeypatch.setattr(newton, "HOLD_CYCLING", False)
     rng = np.random.default_rng(3)
     start = d.copy()
     free = problem.free

@@ -195,24 +195,33 @@ def stalled(norm, last, before, contraction):
 
 
 @njit(cache=True)
-def _holding(closed, last_closed, flips, t_n, hold_tension, hold_after, kind, mu_s, mu_d,
-             cohesion, face, g_se, slip, sliding, gap, shear, shear0, release, has_dashpot, kn,
-             pn, ps, length, e_row, i_row, held):
+def _holding(closed, last_closed, flips, t_n, t_s, bj, bk, free, hold_tension, hold_after,
+             kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, gap, shear, shear0,
+             release, has_dashpot, kn, pn, ps, length, e_row, i_row, held):
     """(m,) the contacts :func:`dense_newton` holds closed from this iterate on, and whether
     that differs from ``held`` (:func:`dda.solvers.newton._hold_cycling`): those held that
     pull by at most ``hold_tension`` of this iterate's largest normal force, and those closed
     at the iterate before, open at this one, with ``hold_after`` opens or closes behind them,
-    that pull by at most that much when held with the others."""
+    that pull by at most that much when held with the others. The largest force is each
+    contact's own: of ``hypot(t_n, t_s)`` on either of its blocks, the smaller
+    (:func:`dda.solvers.newton._hold_measure`)."""
     m = closed.shape[0]
-    largest = 0.0
+    largest = np.zeros(free.shape[0])
     for c in range(m):
-        largest = max(largest, abs(t_n[c]))
-    limit = hold_tension * largest
+        size = math.hypot(t_n[c], t_s[c])
+        largest[bj[c]] = max(largest[bj[c]], size)
+        largest[bk[c]] = max(largest[bk[c]], size)
+    for b in range(free.shape[0]):
+        if not free[b]:
+            largest[b] = np.inf
+    limit = np.empty(m)
+    for c in range(m):
+        limit[c] = hold_tension * min(largest[bj[c]], largest[bk[c]])
     kept = np.zeros(m, dtype=np.bool_)
     opening = np.zeros(m, dtype=np.bool_)
     changed = False
     for c in range(m):
-        kept[c] = held[c] and t_n[c] <= limit
+        kept[c] = held[c] and t_n[c] <= limit[c]
         changed = changed or kept[c] != held[c]
         opening[c] = last_closed[c] and not closed[c] and flips[c] >= hold_after
     if not opening.any():
@@ -221,7 +230,7 @@ def _holding(closed, last_closed, flips, t_n, hold_tension, hold_after, kind, mu
                              shear0, release, has_dashpot, kn, pn, ps, length, e_row, i_row,
                              kept | opening)[9]
     for c in range(m):
-        if opening[c] and trial[c] <= limit:
+        if opening[c] and trial[c] <= limit[c]:
             kept[c] = True
             changed = True
     return kept, changed
@@ -316,10 +325,11 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
                                       gap, shear, shear0, release, has_dashpot, kn, pn, ps,
                                       length, e_row, i_row, held)
         if hold_tension >= 0.0 and it > 0:
-            held, changed = _holding(closed, last_closed, flips, t_n, hold_tension, hold_after,
-                                     kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding,
-                                     gap, shear, shear0, release, has_dashpot, kn, pn, ps,
-                                     length, e_row, i_row, held)
+            held, changed = _holding(closed, last_closed, flips, t_n, t_s, bj, bk, free,
+                                     hold_tension, hold_after, kind, mu_s, mu_d, cohesion,
+                                     face, g_se, slip, sliding, gap, shear, shear0,
+                                     release, has_dashpot, kn, pn, ps, length, e_row,
+                                     i_row, held)
             if changed:
                 (closed, slipping, spring, t_s, g_out, slip_out, sliding_out, kss, ksn, t_n,
                  residual) = contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip,

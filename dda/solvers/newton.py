@@ -273,7 +273,7 @@ class NewtonRaphson(NonlinearSolver):
             resp = el.response(d, held)
             if HOLD_CYCLING:
                 if last_closed is not None:
-                    resp, held = _hold_cycling(el, d, resp, held, flips, last_closed)
+                    resp, held = _hold_cycling(el, d, resp, held, flips, last_closed, free)
                     flips += resp.closed != last_closed
                 else:
                     flips = np.zeros(len(el), dtype=np.int64)
@@ -518,7 +518,20 @@ def _hold_rule() -> tuple[float, int]:
     return (float(CYCLE_TENSION) if HOLD_CYCLING else -1.0), int(HOLD_AFTER_FLIPS)
 
 
-def _hold_cycling(el, d, resp, held, flips, last_closed):
+def _hold_measure(el, force, t_s, free):
+    """(m,) the force a held contact's pull is measured against: the largest contact force
+    (``hypot(t_n, t_s)``, normal and shear) on either of its blocks, the smaller of the two
+    (:func:`dda.solvers.open_close._largest_on_blocks` with the shear forces; a block whose
+    motion is known does not count)."""
+    size = np.hypot(force, t_s)
+    largest = np.zeros(len(free))
+    np.maximum.at(largest, el.bj, size)
+    np.maximum.at(largest, el.bk, size)
+    largest[~free] = np.inf
+    return np.minimum(largest[el.bj], largest[el.bk])
+
+
+def _hold_cycling(el, d, resp, held, flips, last_closed, free):
     """``(response, held)`` of an iterate with the hold rule applied (module docstring).
 
     ``resp`` is the iterate's response with the contacts of ``held`` (None: none) closed;
@@ -530,7 +543,7 @@ def _hold_cycling(el, d, resp, held, flips, last_closed):
     with the others, its pull is within the limit. The response is evaluated again only when
     the held contacts change."""
     force = resp.force if resp.force is not None else resp.t_n
-    limit = CYCLE_TENSION * float(np.max(np.abs(force), initial=0.0))
+    limit = CYCLE_TENSION * _hold_measure(el, force, resp.t_s, free)
     kept = None if held is None else held & (force <= limit)
     opening = last_closed & ~resp.closed & (flips >= HOLD_AFTER_FLIPS)
     if not opening.any():
