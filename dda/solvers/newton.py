@@ -25,17 +25,18 @@ tangent has no shear stiffness, and full steps jumped across a narrow stick band
 
 A contact that has opened or closed ``HOLD_AFTER_FLIPS`` times in the step's iterates and
 would open again is held closed (``HOLD_CYCLING``) while the pull of its spring stays within
-OPEN-CLOSE's ``CYCLE_TENSION`` of the iterate's largest normal force,
+OPEN-CLOSE's ``CYCLE_TENSION`` of the largest contact force on its own blocks,
 
-    p_n g_n <= CYCLE_TENSION max_c |t_n,c|,
+    p_n g_n <= CYCLE_TENSION min(F_j, F_k),   F_b = max over b's contacts of |(t_n, t_s)|
 
-and let go once it pulls harder. Such a contact has no consistent state: closed, the iterate
-opens it; open, its block falls back in. A cohesive joint is where this happens most: its
-strength ``c l`` needs no normal force and is gone once the contact opens, so a contact that
-carries a shear force near ``c l`` at a normal force near zero is switched iterate after
-iterate (:data:`HOLD_CYCLING` has the numbers). Held, it carries a small tension in the
-step's balance; the normal force it commits is the spring's compression only
-(``min(p_n g_n, 0)``, as legacy DDA's held contacts commit).
+(a block whose motion is known does not count), and let go once it pulls harder. Such a
+contact has no consistent state: closed, the iterate opens it; open, its block falls back
+in. A cohesive joint is where this happens most: its strength ``c l`` needs no normal force
+and is gone once the contact opens, so a contact that carries a shear force near ``c l`` at
+a normal force near zero is switched iterate after iterate (:data:`HOLD_CYCLING` has the
+numbers). Held, it carries a small tension in the step's balance; the normal force it
+commits is the spring's compression only (``min(p_n g_n, 0)``, as legacy DDA's held contacts
+commit).
 
 Later iterations whose contacts keep their states (but for ``NEAR_SWITCHES``) solve by GMRES
 preconditioned with the last factorization of the tangent
@@ -490,26 +491,34 @@ HOLD_CYCLING = True
 iterate judges every contact by its gap alone.
 
 Measured on the 311-block cut slope of ``examples/jointed_slope.py`` (0.3 s at its defaults,
-5e10 N/m and dt 2e-3) with cohesive joints (``--cohesion``), two runs side by side on two
-cores. Without the hold, Newton stopped ("cannot go on") at t = 0.025 s with 1 MPa (113 s of
-CPU) and at 0.020 s with 0.1 MPa, and took 14,903 steps for 0.1 s with 10 kPa: in the failing
-steps one contact, at a normal force of 0.1 to 1 N/m and a shear force of 2.4e5 to 2.6e5 N/m
-(of its 5e5), opened and closed 10 to 14 times in 25 iterations. With it, 1 MPa: 2,206
-steps, 98 cut, 70 s (legacy DDA: 2,087, 86, 31 s); 0.1 MPa: 2,830 steps, 96 cut, 89 s
-(legacy 1,588, 60, 28 s); the face blocks moved 0.40 / 0.75 and 0.40 / 0.64 mm (median /
-most; legacy 0.44 / 0.80 and 0.35 / 0.58 mm). Without cohesion the example took 713 steps,
-29 cut, 22.11 / 27.60 mm, against 702, 27, 21.77 / 26.13 without the hold (the shaken slope
-is chaotic at the millimetre), and the N x N stacks of ``benchmarks/stacks.py`` (10 and 30
-a side) the same passes, iterations and factorizations.
+5e10 N/m and dt 2e-3) with cohesive joints (``--cohesion``), runs two at a time on two
+cores, CPU seconds. Without the hold, Newton stopped ("cannot go on") at t = 0.025 s with
+1 MPa (113 s) and at 0.020 s with 0.1 MPa, and took 14,903 steps for 0.1 s with 10 kPa: in
+the failing steps one contact, at a normal force of 0.1 to 1 N/m and a shear force of 2.4e5
+to 2.6e5 N/m (of its 5e5), opened and closed 10 to 14 times in 25 iterations. With it: 1
+MPa 13,592 steps, 495 cut, 260 s, the face blocks 0.47 / 1.20 mm (median / most); 0.1 MPa
+15,125, 501, 314 s, 0.89 / 20.16 mm (legacy DDA: 2,087, 86, 31 s, 0.44 / 0.80 mm and 1,588,
+60, 28 s, 0.35 / 0.58 mm; its OPEN-CLOSE measures a held contact's pull against the scene's
+largest normal force). Measured against the scene's largest normal force, as OPEN-CLOSE
+does, Newton took 2,206 steps, 98 cut, 70 s at 1 MPa, but a light block could hang by a
+held contact: a block sliding and tipping on a cohesive incline moved 8.6 mm instead of
+87.3 mm when a heavy block stood 20 m away, touching nothing
+(``tests/test_cohesive_newton.py``), and on the slope 16 held contacts pulled more than
+their block's weight (a review). Against the contact's own blocks' largest normal force
+alone (without the shear): 20,348 steps, 717 cut, 335 s at 1 MPa. Without cohesion the
+example took 710 steps, 32 cut, 21.90 / 26.03 mm, against 702, 27, 21.77 / 26.13 without
+the hold (the shaken slope is chaotic at the millimetre); the N x N stacks of
+``benchmarks/stacks.py`` (10 and 30 a side) take the same passes, iterations and
+factorizations either way.
 """
 
 HOLD_AFTER_FLIPS = 2
 """The opens and closes of a contact in the step's iterates (line-search iterates included)
-before it may be held: OPEN-CLOSE's count for its own cycle rule. After 4 the cohesive slope
-above took 2,943 steps, 131 cut, 113 s (1 MPa) and 3,991, 107, 173 s (0.1 MPa). Held for
-good (not let go when it pulls harder), a 3 x 3 stack's Newton from a start 0.1 mm off held
-contacts that cycled in the first iterates, did not converge in 25 iterations, and its
-held contacts pulled 3.6% of the largest normal force (``tests/test_cohesive_newton.py``)."""
+before it may be held: OPEN-CLOSE's count for its own cycle rule. With the scene-wide limit
+(:data:`HOLD_CYCLING`), after 4 the cohesive slope above took 2,943 steps, 131 cut, 113 s
+(1 MPa) and 3,991, 107, 173 s (0.1 MPa), against 2,206, 98, 70 s and 2,830, 96, 89 s after
+2. Held for good (not let go when it pulls harder), held contacts pulled more than the limit
+(``tests/test_cohesive_newton.py``)."""
 
 
 def _hold_rule() -> tuple[float, int]:
