@@ -128,16 +128,11 @@ def test_both_paths_hold_alike_from_a_perturbed_start(monkeypatch):
     without the reversed contacts' stick branch) contacts cycle in the first iterates and
     are held and let go: both paths take the same iterations to the same |R| (both end the
     25 at 175 N; without the hold they converged at the 25th)."""
-    from tests.test_dense_newton import _both, _problem_and_start
+    from tests.test_dense_newton import _both, _problem_and_start, perturbed_start
 
     problem, d = _problem_and_start(monkeypatch)
     monkeypatch.setattr(newton, "REVERSED_STICK", False)
-    rng = np.random.default_rng(3)
-    start = d.copy()
-    free = problem.free
-    start[free, :2] += 1e-4 * rng.standard_normal((np.count_nonzero(free), 2))
-    start[free, 2] += 1e-5 * rng.standard_normal(np.count_nonzero(free))
-    a, b = _both(problem, start, monkeypatch)
+    a, b = _both(problem, perturbed_start(problem, d), monkeypatch)
     assert a.converged == b.converged and a.iterations == b.iterations
     np.testing.assert_allclose(a.residual_norms, b.residual_norms, rtol=1e-6,
                                atol=1e-9 * max(a.residual_norms))
