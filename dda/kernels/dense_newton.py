@@ -200,12 +200,16 @@ def _holding(closed, last_closed, flips, t_n, t_s, bj, bk, free, hold_tension, h
              release, has_dashpot, kn, pn, ps, length, e_row, i_row, held):
     """(m,) the contacts :func:`dense_newton` holds closed from this iterate on, and whether
     that differs from ``held`` (:func:`dda.solvers.newton._hold_cycling`): those held that
-    pull by at most ``hold_tension`` of this iterate's largest normal force, and those closed
-    at the iterate before, open at this one, with ``hold_after`` opens or closes behind them,
-    that pull by at most that much when held with the others. The largest force is each
-    contact's own: of ``hypot(t_n, t_s)`` on either of its blocks, the smaller
-    (:func:`dda.solvers.newton._hold_measure`)."""
+    pull by at most ``hold_tension`` of the largest contact force on their blocks, and those
+    closed at the iterate before, open at this one, with ``hold_after`` opens or closes
+    behind them, that pull by at most that much when held with the others. The largest force
+    is each contact's own: of ``hypot(t_n, t_s)`` on either of its blocks, the smaller."""
     m = closed.shape[0]
+    opening = np.zeros(m, dtype=np.bool_)
+    for c in range(m):
+        opening[c] = last_closed[c] and not closed[c] and flips[c] >= hold_after
+    if not (opening.any() or held.any()):  # the common iterate: nothing to measure
+        return held, False
     largest = np.zeros(free.shape[0])
     for c in range(m):
         size = math.hypot(t_n[c], t_s[c])
@@ -218,12 +222,10 @@ def _holding(closed, last_closed, flips, t_n, t_s, bj, bk, free, hold_tension, h
     for c in range(m):
         limit[c] = hold_tension * min(largest[bj[c]], largest[bk[c]])
     kept = np.zeros(m, dtype=np.bool_)
-    opening = np.zeros(m, dtype=np.bool_)
     changed = False
     for c in range(m):
         kept[c] = held[c] and t_n[c] <= limit[c]
         changed = changed or kept[c] != held[c]
-        opening[c] = last_closed[c] and not closed[c] and flips[c] >= hold_after
     if not opening.any():
         return kept, changed
     trial = contact_response(kind, mu_s, mu_d, cohesion, face, g_se, slip, sliding, gap, shear,
@@ -257,7 +259,7 @@ def dense_newton(d, max_iter, tol, round_off, halvings_allowed, cycle_length, re
         fraction of the one before it (:meth:`dda.solvers.NewtonRaphson.iterate`)
     hold_tension, hold_after : a contact that has opened or closed ``hold_after`` times in
         the step's iterates and would open again, pulled by at most ``hold_tension`` of the
-        largest normal force, is held closed while it pulls no harder
+        largest contact force on its blocks, is held closed while it pulls no harder
         (:data:`dda.solvers.newton.HOLD_CYCLING`); ``hold_tension`` negative: none is
     block_k, block_f, free, rigid : the step's block matrices and forces, the blocks with
         unknowns, the blocks without strain unknowns
@@ -424,9 +426,7 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
                       retry_patience, unsettled, max_iter, predictor_iterations,
                       predictor_contraction, tol, round_off,
                       halvings_allowed, cycle_length, reversed_stick, hold_tension, hold_after,
-                      block_k,
-                      block_f, d_known,
-                      n, block_base,
+                      block_k, block_f, d_known, n, block_base,
                       block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
                       reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length,
                       has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,

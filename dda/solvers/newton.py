@@ -74,6 +74,7 @@ from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve, assemble_vector
 from dda.solvers.open_close import (
     CYCLE_TENSION,
+    _largest_on_blocks,
     dense_arguments,
     dense_eligible,
     dense_failure,
@@ -527,36 +528,26 @@ def _hold_rule() -> tuple[float, int]:
     return (float(CYCLE_TENSION) if HOLD_CYCLING else -1.0), int(HOLD_AFTER_FLIPS)
 
 
-def _hold_measure(el, force, t_s, free):
-    """(m,) the force a held contact's pull is measured against: the largest contact force
-    (``hypot(t_n, t_s)``, normal and shear) on either of its blocks, the smaller of the two
-    (:func:`dda.solvers.open_close._largest_on_blocks` with the shear forces; a block whose
-    motion is known does not count)."""
-    size = np.hypot(force, t_s)
-    largest = np.zeros(len(free))
-    np.maximum.at(largest, el.bj, size)
-    np.maximum.at(largest, el.bk, size)
-    largest[~free] = np.inf
-    return np.minimum(largest[el.bj], largest[el.bk])
-
-
 def _hold_cycling(el, d, resp, held, flips, last_closed, free):
     """``(response, held)`` of an iterate with the hold rule applied (module docstring).
 
     ``resp`` is the iterate's response with the contacts of ``held`` (None: none) closed;
     ``flips`` (m,) counts each contact's opens and closes over the step's earlier iterates,
     whose last one left ``last_closed``. With ``t_n`` the normal force of ``resp`` (a held
-    contact's ``p_n g_n``, positive where it pulls) and the limit ``CYCLE_TENSION max |t_n|``:
-    a held contact that pulls by more than the limit is let go; one closed at the iterate
-    before, open at this one and with ``HOLD_AFTER_FLIPS`` flips behind it is held when, held
-    with the others, its pull is within the limit. The response is evaluated again only when
-    the held contacts change."""
-    force = resp.force if resp.force is not None else resp.t_n
-    limit = CYCLE_TENSION * _hold_measure(el, force, resp.t_s, free)
-    kept = None if held is None else held & (force <= limit)
+    contact's ``p_n g_n``, positive where it pulls) and the limit ``CYCLE_TENSION`` times the
+    largest ``hypot(t_n, t_s)`` on either of the contact's blocks, the smaller
+    (:func:`dda.solvers.open_close._largest_on_blocks`): a held contact that pulls by more
+    than the limit is let go; one closed at the iterate before, open at this one and with
+    ``HOLD_AFTER_FLIPS`` flips behind it is held when, held with the others, its pull is
+    within the limit. The response is evaluated again only when the held contacts change."""
     opening = last_closed & ~resp.closed & (flips >= HOLD_AFTER_FLIPS)
+    if held is None and not opening.any():  # the common iterate: nothing to measure
+        return resp, held
+    force = resp.force if resp.force is not None else resp.t_n
+    limit = CYCLE_TENSION * _largest_on_blocks(el, np.hypot(force, resp.t_s), free)
+    kept = None if held is None else held & (force <= limit)
     if not opening.any():
-        if held is None or np.array_equal(kept, held):
+        if np.array_equal(kept, held):
             return resp, held
         return el.response(d, kept), kept
     trial_held = opening if kept is None else kept | opening
