@@ -343,7 +343,7 @@ def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev,
 def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
                calm, gap_tol, pn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding,
                bj, bk, free, settle_friction, band, passes, rtol, floor, cycle_tension,
-               relax_after, patience, secant_from, remember_open):
+               relax_after, patience, secant_from, remember_open, cycle_local):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
     Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
@@ -353,7 +353,10 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     counts as settled. ``flips``, ``pinned``, ``calm`` (a 1-element count of the passes in
     a row that changed no contact between open and closed) and ``lag_memory``
     (:func:`next_lag_force`, which takes ``relax_after``, ``secant_from`` and
-    ``remember_open``) change in place;
+    ``remember_open``) change in place. The cycle rule's limit is ``cycle_tension`` of the
+    largest normal force on the contact's own blocks with ``cycle_local`` (legacy DDA), of
+    the pass's largest normal force without (the fully implicit method's predictor, whose
+    iterations judge every contact again);
     the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
     never), whatever the friction and lagged forces
     (:func:`dda.solvers.open_close.predictor_patience`).
@@ -384,14 +387,21 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
             new_state[i] = _SLIP if slipping[i] and not reversed_ else _STICK
     # the lagged normal force, and the cycle rule
     largest = 0.0
+    cycling = False  # a contact that the cycle rule may hold
+    limit = np.zeros(0)
     for i in range(m):
         largest = _np_max(largest, abs(t_n[i]))
+        cycling = cycling or (flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN)
+    if cycling and cycle_local:
+        limit = _local_force(t_n, bj, bk, free, cycle_tension)
+    elif cycling:
+        limit = np.full(m, cycle_tension * largest)
     lag_ok = np.empty(m, dtype=np.bool_)
     for i in range(m):
         lag_ok[i] = abs(t_n[i] - t_n_lag[i]) <= rtol * _np_max(
             abs(t_n[i]), abs(t_n_lag[i])) + floor * largest
-        if (flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN
-                and pn[i] * gap[i] <= cycle_tension * largest):
+        if (cycling and flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN
+                and pn[i] * gap[i] <= limit[i]):
             new_state[i] = state[i]
             pinned[i] = True
         lag_ok[i] = lag_ok[i] or (pinned[i] and gap[i] >= 0.0)

@@ -104,7 +104,7 @@ def _dense_step(problem: StepProblem) -> StepSolution:
     with section("solve"):
         status, passes, d, state, t_n, t_s, g_se, slip, sliding = legacy_dense_step(
             problem.max_open_close, float(oc_rules.SETTLE_BAND), *pass_rules(),
-            oc_rules.LAG_SECANT_FROM,
+            oc_rules.LAG_SECANT_FROM, bool(oc_rules.CYCLE_LOCAL),
             *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
             *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el))
     count_solve(passes)

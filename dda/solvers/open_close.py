@@ -70,6 +70,25 @@ the shaken cut slope of ``examples/jointed_slope.py`` they pull 1e-4 to 1e-2 of 
 normal force closed and penetrate 1e-4 to 7e-2 of it (as a spring force) open, and were most of
 its cut steps.
 
+The largest normal force is the pass's, the whole scene's, and that is a known wrong answer
+where blocks of very different loads share a scene: a 0.5 x 1 m block sliding and tipping on
+a cohesive 30 degree incline moves 87.2 mm in 0.5 s alone and 15.1 mm when a heavy block
+stands 20 m away touching nothing of it (its contact held closed pulling up to 8% of its
+weight; ``tests/test_open_close_cycles.py``). With ``CYCLE_LOCAL`` legacy DDA measures the
+limit on the contact's own blocks instead (the smaller of their largest normal forces; a
+block whose motion is known does not count), as the fully implicit method's iterations do
+(:data:`dda.solvers.newton.HOLD_CYCLING`): 87.2 and 87.4 mm (the 0.2% left is
+``NORMAL_FORCE_FLOOR``, which stays the scene's; measured on the own blocks it cut the
+first steps of ``tests/stability``'s tower). It is off by default for what it costs: on the
+shaken cut slope the contacts that cycle pull a median 14% of the largest normal force on
+their own blocks and 0.01% of the scene's, so the old limit holds nearly all of them and the
+new one 9% of them, and the example's 0.3 s took 2,172 steps and 73 cuts instead of 990
+and 47; the slope's static settle (``dda.settling``) no longer settled in 400 steps
+(``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own blocks"). The held
+tension does change answers: held at up to 2% of its blocks' own largest force the incline's
+block moves 81.4 mm, at 10% 17.7. The fully implicit method's predictor keeps the scene's
+measure either way: its iterations judge every contact again.
+
 From pass ``LAG_RELAX_AFTER`` on, a lagged normal force that oscillates (its error changed sign
 since the last pass) is under-relaxed, ``N_lag <- (N_lag + N) / 2``: where a sliding contact's
 friction load opens it (a face block's corner), the plain iteration ``N_(k+1) = a - b N_k``
@@ -167,8 +186,9 @@ from dda.solvers.base import StepProblem
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve
 
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
-           "GAP_ROUND_OFF", "CYCLE_TENSION", "LAG_RELAX_AFTER", "LAG_SECANT_FROM", "LAG_PATIENCE",
-           "RETRY_PATIENCE", "SETTLE_BAND", "predictor_patience", "round_off_gap", "next_lag"]
+           "GAP_ROUND_OFF", "CYCLE_TENSION", "CYCLE_LOCAL", "LAG_RELAX_AFTER", "LAG_SECANT_FROM",
+           "LAG_PATIENCE", "RETRY_PATIENCE", "SETTLE_BAND", "predictor_patience", "round_off_gap",
+           "next_lag"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
@@ -177,8 +197,12 @@ NORMAL_FORCE_FLOOR = 1e-4
 # a linearized gap within this fraction of the edge's length of zero keeps the contact's state
 GAP_ROUND_OFF = 1e-12
 # a contact that cycles open / closed stays closed when it pulls less than this fraction of the
-# pass's largest normal force
+# pass's largest normal force (or, with CYCLE_LOCAL, of the largest on its own blocks)
 CYCLE_TENSION = 1e-2
+# legacy DDA: the cycle rule's limit measured on the contact's own blocks (module docstring:
+# right where a heavy block far away held a light block's contact, and off by default for what
+# it costs elsewhere)
+CYCLE_LOCAL = False
 # the pass from which a sliding contact's lagged normal force is under-relaxed
 LAG_RELAX_AFTER = 6
 # legacy DDA: the pass from which an oscillating lagged normal force takes the secant step
@@ -248,7 +272,8 @@ def open_close(problem: StepProblem, explicit: bool,
     remember_open = not explicit  # the predictor's lag memory only
     if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
-                                settle_friction, band, patience, secant_from, remember_open)
+                                settle_friction, band, patience, secant_from, remember_open,
+                                explicit and CYCLE_LOCAL)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -269,7 +294,8 @@ def open_close(problem: StepProblem, explicit: bool,
         except SingularSystemError as exc:
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         new_state, t_n = _next_states(el, state, history, judged, dgs, t_slip, held, gap_tol)
-        lag_ok = _lag_settled(el, state, new_state, judged, t_n, t_n_lag, flips, pinned)
+        lag_ok = _lag_settled(el, state, new_state, judged, t_n, t_n_lag, flips, pinned,
+                              problem.free if explicit and CYCLE_LOCAL else None)
         flips += (state != OPEN) != (new_state != OPEN)
         # settled when no state changes and every sliding contact's friction came from this
         # pass's normal force; for the fully implicit method's predictor a switch between
@@ -320,7 +346,7 @@ def _solve_pass(problem, k, f):
 
 
 def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle_friction,
-                     band, patience, secant_from, remember_open) -> OpenCloseResult:
+                     band, patience, secant_from, remember_open, cycle_local) -> OpenCloseResult:
     """The iteration of :func:`open_close` with the built-in laws' compiled passes
     (:mod:`dda.kernels.open_close`): the same rules in the same order, the same results."""
     m = len(el)
@@ -329,7 +355,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     g_se, _, sliding = kernel_history(history, m)
     if dense_eligible(problem):
         return _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
-                      patience, secant_from, remember_open,
+                      patience, secant_from, remember_open, cycle_local,
                       (g_se, sliding, as_float64(t_stick)))
     pn, kn, ps, length, gap0, e_row, i_row, t_stick = (
         np.ascontiguousarray(a, dtype=f64) for a in (
@@ -361,7 +387,8 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
             new_state, t_n, done, friction_settled, next_lag, lag_error, lag_ok = pass_judge(
                 state, held, judged, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips,
                 pinned, calm, gap_tol, kn, ps, length, *laws, g_se, sliding, bj, bk, free,
-                settle_friction, float(band), passes, *rules, secant_from, remember_open)
+                settle_friction, float(band), passes, *rules, secant_from, remember_open,
+                cycle_local)
         if PASS_LOG is not None:
             PASS_LOG.append(_why(state, new_state, lag_ok))
         if done:
@@ -448,7 +475,7 @@ def dense_failure(status: int, passes: int) -> str:
 
 
 def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, patience,
-           secant_from, remember_open, start) -> OpenCloseResult:
+           secant_from, remember_open, cycle_local, start) -> OpenCloseResult:
     """:func:`_compiled_passes` on a dense system: every pass in one kernel call
     (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
     round-off). ``start`` is the step's pulled-back ``g_se``, ``sliding`` and stick forces.
@@ -456,7 +483,7 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, pa
     with section("solve"):
         status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
             problem.max_open_close, bool(settle_friction), float(band), *pass_rules(patience),
-            secant_from, remember_open, *dense_arguments(problem), *start,
+            secant_from, remember_open, cycle_local, *dense_arguments(problem), *start,
             np.asarray(state, dtype=np.int8),
             np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
     count_solve(passes)
@@ -472,9 +499,11 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, pa
 _NO_KEEP = np.zeros(0, dtype=np.int64)
 
 
-def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned):
+def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free):
     """(m,) the contacts whose lagged normal force is settled; applies the cycle rule
-    (``new_state`` and ``pinned`` change in place)."""
+    (``new_state`` and ``pinned`` change in place) with its limit measured on each contact's
+    own blocks (``free``: the blocks with unknowns), or with ``free`` None on the pass's
+    largest normal force (the fully implicit method's predictor)."""
     # a sliding contact's friction came from the last pass's normal force: the pass only
     # counts when that force is the one this pass ended with (forces below NORMAL_FORCE_FLOOR
     # of the step's largest matter to no block: a barely touching contact would otherwise
@@ -483,13 +512,18 @@ def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned):
     lag_ok = np.abs(t_n - t_n_lag) <= NORMAL_FORCE_RTOL * np.maximum(
         np.abs(t_n), np.abs(t_n_lag)) + NORMAL_FORCE_FLOOR * largest
     # a contact that has been opened and closed again in this step's passes and would open
-    # once more, pulled by less than CYCLE_TENSION of the largest normal force, stays closed
-    # (open it penetrates, closed it pulls: alone it would cycle until the pass limit), and
-    # while it pulls its lagged normal force does not hold the iteration
-    cycling = ((flips >= 2) & (state != OPEN) & (new_state == OPEN)
-               & (el.judge_stiffness * gap <= CYCLE_TENSION * largest))
-    new_state[cycling] = state[cycling]
-    pinned |= cycling
+    # once more, pulled by less than CYCLE_TENSION of the largest contact force on its own
+    # blocks, stays closed (open it penetrates, closed it pulls: alone it would cycle until
+    # the pass limit), and while it pulls its lagged normal force does not hold the iteration
+    cycling = (flips >= 2) & (state != OPEN) & (new_state == OPEN)
+    if cycling.any():
+        if free is None:
+            limit = CYCLE_TENSION * largest
+        else:
+            limit = CYCLE_TENSION * _largest_on_blocks(el, t_n, free)
+        cycling &= el.judge_stiffness * gap <= limit
+        new_state[cycling] = state[cycling]
+        pinned |= cycling
     return lag_ok | (pinned & (gap >= 0.0))
 
 
