@@ -265,31 +265,38 @@ FAMILIES.update({name: (draw, run_wide) for name, draw in WIDE.items()})
 
 
 def run_one(run, spec, cap: float) -> tuple[str, str]:
-    """How one run ended, and its message."""
+    """How one run ended, and its message. The cap running out as the run ends (its signal
+    between the run's return and the alarm's reset) counts as a timeout."""
     fired = []
 
     def over(signum, frame):
         fired.append(True)
         raise _OverCap
 
-    signal.signal(signal.SIGALRM, over)
-    signal.alarm(max(1, int(cap)))
+    previous = signal.signal(signal.SIGALRM, over)
     try:
-        run(spec)
-        return "completed", ""
-    except _OverCap:
-        return "timeout", f"over {cap:g} s"
-    except dda.OverlapError as exc:
-        return "exception", f"OverlapError: {exc}"
-    except dda.SimulationError as exc:
-        msg = str(exc).split("\n")[0]
-        return ("untracked" if "untracked penetration" in msg else "error"), msg
-    except Exception as exc:  # noqa: BLE001 - any failure is a finding
-        if fired:  # the cap's signal inside a compiled kernel comes out as a SystemError
-            return "timeout", f"over {cap:g} s"
-        return "exception", f"{type(exc).__name__}: {exc}"
+        try:
+            signal.alarm(max(1, int(cap)))
+            run(spec)
+            end = "completed", ""
+        except _OverCap:
+            end = "timeout", f"over {cap:g} s"
+        except dda.OverlapError as exc:
+            end = "exception", f"OverlapError: {exc}"
+        except dda.SimulationError as exc:
+            msg = str(exc).split("\n")[0]
+            end = ("untracked" if "untracked penetration" in msg else "error"), msg
+        except Exception as exc:  # noqa: BLE001 - any failure is a finding
+            # the cap's signal inside a compiled kernel comes out as a SystemError
+            end = (("timeout", f"over {cap:g} s") if fired
+                   else ("exception", f"{type(exc).__name__}: {exc}"))
+        finally:
+            signal.alarm(0)
+    except _OverCap:  # fired in a handler above or at the reset: the alarm is spent
+        end = "timeout", f"over {cap:g} s"
     finally:
-        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+    return end
 
 
 def main(argv=None) -> int:
