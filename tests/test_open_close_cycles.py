@@ -102,7 +102,8 @@ class NumpyCohesive(CoulombLike):
 
 
 def _far_block_moves(solver, law):
-    """How far the incline's block moves in 0.5 s alone and beside a far heavy block."""
+    """How far the incline's block moves in 0.5 s alone and beside a far heavy block
+    (``solver``: a name, or a factory of a solver)."""
     from tests.test_cohesive_newton import incline_with_a_far_block
 
     moved = []
@@ -111,7 +112,8 @@ def _far_block_moves(solver, law):
         if law == "numpy":
             joint = scene.default_joint
             scene.set_joint(replace(joint, friction=NumpyCohesive(20.0, 4000.0)))
-        sim = dda.Simulation(scene, dt=1e-3, solver=make_solver(solver), max_open_close=30)
+        made = make_solver(solver) if isinstance(solver, str) else solver()
+        sim = dda.Simulation(scene, dt=1e-3, solver=made, max_open_close=30)
         result = sim.run(0.5, progress=False)
         moved.append(np.hypot(*result.displacement(small)[-1]))
     return moved
@@ -142,6 +144,20 @@ def test_a_block_far_away_does_not_hold_a_contact_closed(solver, local, rtol, la
     moved = _far_block_moves(solver, law)
     assert moved[0] > 0.05
     assert moved[1] == pytest.approx(moved[0], rel=rtol)
+
+
+def test_legacy_dda_takes_the_local_cycle_limit_as_its_own_setting():
+    """``LegacyPullBack(cycle_local=True)`` is the module's switch for one solver: the same
+    runs to the bit, whatever ``CYCLE_LOCAL`` says; ``cycle_local=False`` keeps the scene's
+    measure (the far block's 15.1 mm)."""
+    assert open_close.CYCLE_LOCAL is False
+    by_setting = _far_block_moves(lambda: LegacyPullBack(cycle_local=True), "compiled")
+    assert by_setting[1] == pytest.approx(by_setting[0], rel=5e-3)
+    scene_wide = _far_block_moves(lambda: LegacyPullBack(cycle_local=False), "compiled")
+    assert scene_wide[0] == by_setting[0] and scene_wide[1] < 0.5 * scene_wide[0]
+    with pytest.raises(TypeError, match="cycle_local"):
+        LegacyPullBack(cycle_local="yes")
+    assert repr(LegacyPullBack(cycle_local=True)) == "LegacyPullBack(cycle_local=True)"
 
 
 def test_the_local_cycle_limit_decides_alike_on_every_path(monkeypatch):

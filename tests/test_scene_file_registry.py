@@ -236,6 +236,15 @@ def test_newton_settings_under_the_legacy_solver_are_named(tmp_path):
     text = SCENE.replace('solver = "legacy"', 'solver = "legacy"\ntol = 1e-8\nmax_iter = 9')
     with pytest.raises(SceneFileError, match=r"line 33, simulation: tol and max_iter are not "
                                              r"settings of solver = 'legacy' \(it takes: "
-                                             r"none\)"):
+                                             r"cycle_local\)"):
         load_scene(write(tmp_path, text))
+
+
+def test_legacy_dda_takes_its_cycle_limit_from_a_scene_file(tmp_path):
+    text = SCENE.replace('solver = "legacy"', 'solver = "legacy"\ncycle_local = true')
+    solver = load_scene(write(tmp_path, text)).solver
+    assert type(solver) is LegacyPullBack and solver.cycle_local is True
+    assert load_scene(write(tmp_path, SCENE)).solver.cycle_local is None
+    with pytest.raises(SceneFileError, match="cycle_local"):
+        load_scene(write(tmp_path, text.replace("cycle_local = true", 'cycle_local = "yes"')))
 

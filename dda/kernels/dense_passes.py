@@ -111,12 +111,10 @@ def single_switch(state, proposed, gap):
 @njit(cache=True)
 def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
                  patience, secant_from, remember_open, cycle_local, block_k, block_f, d_known,
-                 n,
-                 block_base, block_step,
-                 free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, rows,
-                 terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length, has_dashpot, dashpot,
-                 reference, release, kind, mu_s, mu_d, cohesion, face, g_se, sliding, t_stick,
-                 state, held, gap_tol, t_n_lag):
+                 n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
+                 side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps,
+                 kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion,
+                 face, g_se, sliding, t_stick, state, held, gap_tol, t_n_lag):
     """Every pass of one step's OPEN-CLOSE iteration on a dense system (module docstring).
 
     Parameters

@@ -71,8 +71,8 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     cycle_tension, relax_after, patience, retry_patience, secant_from, cycle_local)`` (the fully
     implicit method's patience of its predictor and of its retry, :func:`dda.solvers.open_close.
     predictor_patience`, and legacy DDA's secant lag, ``LAG_SECANT_FROM``, and cycle limit,
-    ``CYCLE_LOCAL``); the rest are the
-    arguments of the kernels named in the module docstring, under their names there.
+    ``CYCLE_LOCAL``); the rest are the arguments of the kernels named in the module
+    docstring, under their names there.
 
     Returns
     -------

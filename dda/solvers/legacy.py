@@ -22,6 +22,7 @@ from dda.solvers.open_close import (
     dense_arguments,
     dense_eligible,
     dense_failure,
+    local_cycle_limit,
     open_close,
     pass_rules,
     round_off_gap,
@@ -39,11 +40,23 @@ between the start's and the end's."""
 class LegacyPullBack(NonlinearSolver):
     """Legacy DDA: OPEN-CLOSE iteration and explicit pull-back of the excess friction.
 
+    Parameters
+    ----------
+    cycle_local : bool or None
+        Measure OPEN-CLOSE's cycle rule on a contact's own blocks: a contact that cycles
+        between open and closed is held closed while it pulls by at most ``CYCLE_TENSION``
+        of the largest normal force on either of its blocks (the smaller), instead of the
+        scene's largest. Right where a heavy block far away would hold a light block's
+        contact, and costly elsewhere (:mod:`dda.solvers.open_close` has the numbers).
+        None (the default): :data:`dda.solvers.open_close.CYCLE_LOCAL`, read at each step.
+
     Examples
     --------
     >>> from dda.solvers import LegacyPullBack
     >>> LegacyPullBack()
     LegacyPullBack()
+    >>> LegacyPullBack(cycle_local=True)
+    LegacyPullBack(cycle_local=True)
     """
 
     name = "legacy"
@@ -54,12 +67,25 @@ class LegacyPullBack(NonlinearSolver):
     auto_steps_per_drop = 4100.0
     # stiffer stick springs gain it nothing: its explicit friction's error stays (rule 2)
     auto_kappa = 3.0
+    # (a subclass's own __init__ need not set it)
+    cycle_local = None
+
+    def __init__(self, cycle_local: bool | None = None):
+        if cycle_local is not None and not isinstance(cycle_local, bool | np.bool_):
+            raise TypeError("LegacyPullBack: cycle_local must be True, False or None, got "
+                            f"{cycle_local!r}")
+        self.cycle_local = None if cycle_local is None else bool(cycle_local)
+
+    def __repr__(self):
+        extra = "" if self.cycle_local is None else f"cycle_local={self.cycle_local}"
+        return f"LegacyPullBack({extra})"
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element
+        local = local_cycle_limit(self)
         if LEGACY_DENSE_STEP and dense_eligible(problem):
-            return _dense_step(problem)
-        oc = open_close(problem, explicit=True)
+            return _dense_step(problem, local)
+        oc = open_close(problem, explicit=True, cycle_local=local)
         if not oc.converged:
             return StepSolution(None, None, False, oc.passes, oc.passes, oc.reason)
         if len(el) == 0:
@@ -94,7 +120,7 @@ def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
                       kernel_history_dict(history, g_se, slip, sliding))
 
 
-def _dense_step(problem: StepProblem) -> StepSolution:
+def _dense_step(problem: StepProblem, cycle_local: bool) -> StepSolution:
     """:meth:`LegacyPullBack.solve_step` on a dense system with the built-in laws: the
     pull-back, every OPEN-CLOSE pass and the step's end in one kernel call (the same
     decisions and numbers as the passes' kernel between the start's and the end's). Its time
@@ -104,7 +130,7 @@ def _dense_step(problem: StepProblem) -> StepSolution:
     with section("solve"):
         status, passes, d, state, t_n, t_s, g_se, slip, sliding = legacy_dense_step(
             problem.max_open_close, float(oc_rules.SETTLE_BAND), *pass_rules(),
-            oc_rules.LAG_SECANT_FROM, bool(oc_rules.CYCLE_LOCAL),
+            oc_rules.LAG_SECANT_FROM, bool(cycle_local),
             *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
             *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el))
     count_solve(passes)

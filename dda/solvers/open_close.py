@@ -74,8 +74,9 @@ The largest normal force is the pass's, the whole scene's, and that is a known w
 where blocks of very different loads share a scene: a 0.5 x 1 m block sliding and tipping on
 a cohesive 30 degree incline moves 87.2 mm in 0.5 s alone and 15.1 mm when a heavy block
 stands 20 m away touching nothing of it (its contact held closed pulling up to 8% of its
-weight; ``tests/test_open_close_cycles.py``). With ``CYCLE_LOCAL`` legacy DDA measures the
-limit on the contact's own blocks instead (the smaller of their largest normal forces; a
+weight; ``tests/test_open_close_cycles.py``). With ``CYCLE_LOCAL`` (or
+``LegacyPullBack(cycle_local=True)`` for one solver) legacy DDA measures the limit on the
+contact's own blocks instead (the smaller of their largest normal forces; a
 block whose motion is known does not count), as the fully implicit method's iterations do
 (:data:`dda.solvers.newton.HOLD_CYCLING`): 87.2 and 87.4 mm (the 0.2% left is
 ``NORMAL_FORCE_FLOOR``, which stays the scene's; measured on the own blocks it cut the
@@ -83,8 +84,8 @@ first steps of ``tests/stability``'s tower). It is off by default for what it co
 shaken cut slope the contacts that cycle pull a median 14% of the largest normal force on
 their own blocks and 0.01% of the scene's, so the old limit holds nearly all of them and the
 new one 9% of them, and the example's 0.3 s took 2,172 steps and 73 cuts instead of 990
-and 47; the slope's static settle (``dda.settling``) no longer settled in 400 steps
-(``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own blocks"). The held
+and 47; the slope's held static steps no longer settled in 400 (``dda.settling`` keeps the
+scene's measure; ``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own blocks"). The held
 tension does change answers: held at up to 2% of its blocks' own largest force the incline's
 block moves 81.4 mm, at 10% 17.7. The fully implicit method's predictor keeps the scene's
 measure either way: its iterations judge every contact again.
@@ -188,7 +189,7 @@ from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_so
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
            "GAP_ROUND_OFF", "CYCLE_TENSION", "CYCLE_LOCAL", "LAG_RELAX_AFTER", "LAG_SECANT_FROM",
            "LAG_PATIENCE", "RETRY_PATIENCE", "SETTLE_BAND", "predictor_patience", "round_off_gap",
-           "next_lag"]
+           "next_lag", "local_cycle_limit"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
@@ -248,19 +249,24 @@ class OpenCloseResult:
 
 def open_close(problem: StepProblem, explicit: bool,
                settle_friction: bool | None = None,
-               band: float | None = None) -> OpenCloseResult:
+               band: float | None = None,
+               cycle_local: bool | None = None) -> OpenCloseResult:
     """Run the OPEN-CLOSE iteration of one step (see the module docstring).
 
     ``settle_friction`` (default: ``explicit``) asks for the stick and slip states to settle
     too; without it only the open and closed ones must. ``band`` (default: ``SETTLE_BAND``
     for legacy DDA, ``explicit``, and 0 for the fully implicit method's predictor): state
     changes that move less force than this fraction of the largest normal force on the
-    lighter loaded of the contact's blocks do not take another pass.
+    lighter loaded of the contact's blocks do not take another pass. ``cycle_local`` (default:
+    ``CYCLE_LOCAL`` for legacy DDA, False for the predictor) measures the cycle rule's limit
+    on each contact's own blocks.
     """
     if settle_friction is None:
         settle_friction = explicit
     if band is None:
         band = SETTLE_BAND if explicit else 0.0
+    if cycle_local is None:
+        cycle_local = explicit and CYCLE_LOCAL
     patience = predictor_patience(explicit, settle_friction)
     el = problem.element
     if len(el) == 0:  # no contacts: one linear solve settles the step
@@ -273,7 +279,7 @@ def open_close(problem: StepProblem, explicit: bool,
     if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
                                 settle_friction, band, patience, secant_from, remember_open,
-                                explicit and CYCLE_LOCAL)
+                                bool(cycle_local))
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -295,7 +301,7 @@ def open_close(problem: StepProblem, explicit: bool,
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         new_state, t_n = _next_states(el, state, history, judged, dgs, t_slip, held, gap_tol)
         lag_ok = _lag_settled(el, state, new_state, judged, t_n, t_n_lag, flips, pinned,
-                              problem.free if explicit and CYCLE_LOCAL else None)
+                              problem.free if cycle_local else None)
         flips += (state != OPEN) != (new_state != OPEN)
         # settled when no state changes and every sliding contact's friction came from this
         # pass's normal force; for the fully implicit method's predictor a switch between
@@ -448,6 +454,14 @@ def dense_layout(pattern) -> tuple:
     return layout
 
 
+def local_cycle_limit(solver) -> bool:
+    """Whether ``solver``'s OPEN-CLOSE measures the cycle rule's limit on a contact's own
+    blocks: legacy DDA's ``cycle_local``, or ``CYCLE_LOCAL`` where that is None (a solver
+    without the setting: ``CYCLE_LOCAL``, which only legacy DDA's passes read)."""
+    flag = getattr(solver, "cycle_local", None)
+    return bool(CYCLE_LOCAL if flag is None else flag)
+
+
 def pass_rules(patience: int | None = None) -> tuple:
     """The passes' rules as the kernels take them: ``NORMAL_FORCE_RTOL``,
     ``NORMAL_FORCE_FLOOR``, ``CYCLE_TENSION``, ``LAG_RELAX_AFTER`` and the patience
@@ -512,9 +526,10 @@ def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free):
     lag_ok = np.abs(t_n - t_n_lag) <= NORMAL_FORCE_RTOL * np.maximum(
         np.abs(t_n), np.abs(t_n_lag)) + NORMAL_FORCE_FLOOR * largest
     # a contact that has been opened and closed again in this step's passes and would open
-    # once more, pulled by less than CYCLE_TENSION of the largest contact force on its own
-    # blocks, stays closed (open it penetrates, closed it pulls: alone it would cycle until
-    # the pass limit), and while it pulls its lagged normal force does not hold the iteration
+    # once more, pulled by less than CYCLE_TENSION of the largest normal force (the pass's,
+    # or its own blocks'), stays closed (open it penetrates, closed it pulls: alone it would
+    # cycle until the pass limit), and while it pulls its lagged normal force does not hold
+    # the iteration
     cycling = (flips >= 2) & (state != OPEN) & (new_state == OPEN)
     if cycling.any():
         if free is None:
