@@ -83,12 +83,12 @@ block whose motion is known does not count), as the fully implicit method's iter
 first steps of ``tests/stability``'s tower). It is off by default for what it costs: on the
 shaken cut slope the contacts that cycle pull a median 14% of the largest normal force on
 their own blocks and 0.01% of the scene's, so the old limit holds nearly all of them and the
-new one 9% of them, and the example's 0.3 s took 2,172 steps and 73 cuts instead of 990
-and 47; the slope's held static steps no longer settled in 400 (``dda.settling`` keeps the
-scene's measure; ``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own blocks"). The held
-tension does change answers: held at up to 2% of its blocks' own largest force the incline's
-block moves 81.4 mm, at 10% 17.7. The fully implicit method's predictor keeps the scene's
-measure either way: its iterations judge every contact again.
+new one 9% of them, and the example's 0.3 s took 2,172 steps and 73 cuts instead of 990 and
+47; the slope's held static steps no longer settled in 400 (``dda.settling`` keeps the
+scene's measure; ``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own
+blocks"). The held tension does change answers: held at up to 2% of its blocks' own largest
+force the incline's block moves 81.4 mm, at 10% 17.7. The fully implicit method's predictor
+keeps the scene's measure either way: its iterations judge every contact again.
 
 From pass ``LAG_RELAX_AFTER`` on, a lagged normal force that oscillates (its error changed sign
 since the last pass) is under-relaxed, ``N_lag <- (N_lag + N) / 2``: where a sliding contact's
