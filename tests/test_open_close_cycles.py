@@ -146,13 +146,15 @@ def test_a_block_far_away_does_not_hold_a_contact_closed(solver, local, rtol, la
     assert moved[1] == pytest.approx(moved[0], rel=rtol)
 
 
-def test_legacy_dda_takes_the_local_cycle_limit_as_its_own_setting():
+def test_legacy_dda_takes_the_local_cycle_limit_as_its_own_setting(monkeypatch):
     """``LegacyPullBack(cycle_local=True)`` is the module's switch for one solver: the same
-    runs to the bit, whatever ``CYCLE_LOCAL`` says; ``cycle_local=False`` keeps the scene's
-    measure (the far block's 15.1 mm)."""
+    runs to the bit as with ``CYCLE_LOCAL``, whatever ``CYCLE_LOCAL`` says;
+    ``cycle_local=False`` keeps the scene's measure (the far block's 15.1 mm)."""
     assert open_close.CYCLE_LOCAL is False
     by_setting = _far_block_moves(lambda: LegacyPullBack(cycle_local=True), "compiled")
     assert by_setting[1] == pytest.approx(by_setting[0], rel=5e-3)
+    monkeypatch.setattr(open_close, "CYCLE_LOCAL", True)
+    assert _far_block_moves("legacy", "compiled") == by_setting
     scene_wide = _far_block_moves(lambda: LegacyPullBack(cycle_local=False), "compiled")
     assert scene_wide[0] == by_setting[0] and scene_wide[1] < 0.5 * scene_wide[0]
     with pytest.raises(TypeError, match="cycle_local"):
