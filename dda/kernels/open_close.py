@@ -388,20 +388,18 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     # the lagged normal force, and the cycle rule
     largest = 0.0
     cycling = False  # a contact that the cycle rule may hold
-    limit = np.zeros(0)
+    local = np.zeros(0)  # its limit per contact, with cycle_local
     for i in range(m):
         largest = _np_max(largest, abs(t_n[i]))
         cycling = cycling or (flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN)
     if cycling and cycle_local:
-        limit = _local_force(t_n, bj, bk, free, cycle_tension)
-    elif cycling:
-        limit = np.full(m, cycle_tension * largest)
+        local = _local_force(t_n, bj, bk, free, cycle_tension)
     lag_ok = np.empty(m, dtype=np.bool_)
     for i in range(m):
         lag_ok[i] = abs(t_n[i] - t_n_lag[i]) <= rtol * _np_max(
             abs(t_n[i]), abs(t_n_lag[i])) + floor * largest
         if (cycling and flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN
-                and pn[i] * gap[i] <= limit[i]):
+                and pn[i] * gap[i] <= (local[i] if cycle_local else cycle_tension * largest)):
             new_state[i] = state[i]
             pinned[i] = True
         lag_ok[i] = lag_ok[i] or (pinned[i] and gap[i] >= 0.0)
