@@ -51,7 +51,7 @@ the factors of ``A`` (one solve with a right-hand side per spring) inside the re
 below, whose residuals are the new matrix's, so the answer is as accurate as a new
 factorization's. On the 60 x 60 stack of ``benchmarks/stacks.py`` (legacy DDA) 0.7 of 4.7
 passes a step take it, and the median step went from 247-265 to 222-238 ms. Newton's
-predictor does not use it (:data:`dda.solvers.newton.PREDICTOR_LOW_RANK`).
+predictor uses it too (:data:`dda.solvers.newton.PREDICTOR_LOW_RANK`).
 
 **Mixed precision.** A system of at least ``MIXED_MIN_UNKNOWNS`` unknowns is factorized by
 PARDISO in single precision (its ``iparm[27]``) and its solution refined in double precision,
