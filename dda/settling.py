@@ -377,9 +377,10 @@ def _static_steps(model: Model, steps_model: Model, state: StepState, dt0: float
     ``MECHANISM_MOVE`` of its size and goes on moving alike is a :class:`SimulationError`;
     without, a block that has moved ``RELEASE_MOVE`` of its size from ``state`` ends the
     steps unsettled (it slides on)."""
-    # (whatever the run's: module docstring) with the cycle rule on the pass's largest normal
-    # force whatever the run's: on the contacts' own blocks the cut slope's held steps did
-    # not settle in 400; the run's own steps judge the contacts that the settle held
+    # (whatever the run's: module docstring) with the cycle rule measured over each contact's
+    # group of touching blocks whatever the run's: on the contacts' own blocks the cut slope's
+    # held steps did not settle in 400; the run's own steps judge the contacts that the
+    # settle held
     solver = LegacyPullBack(cycle_local=False)
     free = model.free
     start = state.x

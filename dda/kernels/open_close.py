@@ -41,6 +41,12 @@ _OPEN, _STICK, _SLIP = 0, 1, 2
 #: the open <-> closed changes of a contact in the step before the lag memory takes it
 REMEMBER_FROM_FLIPS = 4
 
+#: what the cycle rule measures a held contact's pull against (``pass_judge``'s
+#: ``cycle_measure``): the pass's largest normal force, the largest on the contact's own
+#: blocks, or the largest in the contact's group of free blocks that touch
+#: (:func:`dda.solvers.open_close.cycle_measure`)
+CYCLE_SCENE, CYCLE_BLOCKS, CYCLE_GROUP = 0, 1, 2
+
 
 def kernel_history(history, m):
     """The history arrays the kernels take: ``g_se``, ``slip``, ``sliding`` (zeros where
@@ -343,7 +349,7 @@ def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev,
 def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
                calm, gap_tol, pn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding,
                bj, bk, free, settle_friction, band, passes, rtol, floor, cycle_tension,
-               relax_after, patience, secant_from, remember_open, cycle_local):
+               relax_after, patience, secant_from, remember_open, cycle_measure):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
     Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
@@ -354,9 +360,10 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     a row that changed no contact between open and closed) and ``lag_memory``
     (:func:`next_lag_force`, which takes ``relax_after``, ``secant_from`` and
     ``remember_open``) change in place. The cycle rule's limit is ``cycle_tension`` of the
-    largest normal force on the contact's own blocks with ``cycle_local`` (legacy DDA), of
-    the pass's largest normal force without (the fully implicit method's predictor, whose
-    iterations judge every contact again);
+    largest normal force in the contact's group of touching free blocks (``cycle_measure``
+    ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`), on its own blocks
+    (``CYCLE_BLOCKS``) or in the pass (``CYCLE_SCENE``: the fully implicit method's
+    predictor, whose iterations judge every contact again);
     the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
     never), whatever the friction and lagged forces
     (:func:`dda.solvers.open_close.predictor_patience`).
@@ -388,18 +395,21 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     # the lagged normal force, and the cycle rule
     largest = 0.0
     cycling = False  # a contact that the cycle rule may hold
-    local = np.zeros(0)  # its limit per contact, with cycle_local
+    local = np.zeros(0)  # its limit per contact, measured on blocks or groups
     for i in range(m):
         largest = _np_max(largest, abs(t_n[i]))
         cycling = cycling or (flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN)
-    if cycling and cycle_local:
+    if cycling and cycle_measure == CYCLE_BLOCKS:
         local = _local_force(t_n, bj, bk, free, cycle_tension)
+    elif cycling and cycle_measure == CYCLE_GROUP:
+        local = _group_force(t_n, state, bj, bk, free, cycle_tension)
     lag_ok = np.empty(m, dtype=np.bool_)
     for i in range(m):
         lag_ok[i] = abs(t_n[i] - t_n_lag[i]) <= rtol * _np_max(
             abs(t_n[i]), abs(t_n_lag[i])) + floor * largest
         if (cycling and flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN
-                and pn[i] * gap[i] <= (local[i] if cycle_local else cycle_tension * largest)):
+                and pn[i] * gap[i] <= (cycle_tension * largest if cycle_measure == CYCLE_SCENE
+                                       else local[i])):
             new_state[i] = state[i]
             pinned[i] = True
         lag_ok[i] = lag_ok[i] or (pinned[i] and gap[i] >= 0.0)
@@ -510,6 +520,49 @@ def _local_force(t_n, bj, bk, free, band):
     local = np.empty(t_n.shape[0])
     for i in range(t_n.shape[0]):
         local[i] = band * _np_min(largest[bj[i]], largest[bk[i]])
+    return local
+
+
+@njit(cache=True)
+def _group_root(parent, b):
+    """The root of block ``b``'s group in the union-find forest ``parent`` (paths halved on
+    the way)."""
+    while parent[b] != b:
+        parent[b] = parent[parent[b]]
+        b = parent[b]
+    return b
+
+
+@njit(cache=True)
+def _group_force(t_n, state, bj, bk, free, band):
+    """``band`` times the largest normal force in each contact's group: the free blocks
+    joined through contacts closed in ``state`` between two free blocks (a block whose motion
+    is known joins none; a contact between two groups takes the smaller of their forces).
+    Where every free block touches the others it is the pass's largest normal force; a block
+    that touches only fixed ones is measured on its own. Each block's group is found by
+    union-find, in one sweep of the contacts and one of the blocks."""
+    nb = free.shape[0]
+    m = t_n.shape[0]
+    parent = np.arange(nb)
+    for i in range(m):
+        if state[i] != _OPEN and free[bj[i]] and free[bk[i]]:
+            a, b = _group_root(parent, bj[i]), _group_root(parent, bk[i])
+            if a != b:
+                parent[a] = b
+    root = np.empty(nb, dtype=np.int64)
+    for b in range(nb):
+        root[b] = _group_root(parent, b)
+    largest = np.zeros(nb)
+    for i in range(m):
+        if free[bj[i]]:
+            largest[root[bj[i]]] = _np_max(largest[root[bj[i]]], abs(t_n[i]))
+        if free[bk[i]]:
+            largest[root[bk[i]]] = _np_max(largest[root[bk[i]]], abs(t_n[i]))
+    local = np.empty(m)
+    for i in range(m):
+        fj = largest[root[bj[i]]] if free[bj[i]] else np.inf
+        fk = largest[root[bk[i]]] if free[bk[i]] else np.inf
+        local[i] = band * _np_min(fj, fk)
     return local
 
 

@@ -68,11 +68,11 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     ``law`` is ``(kind, mu_static, mu_dynamic, cohesion)`` of the scene's one law, ``init``
     its initial ``(g_se, slip, sliding)``, ``faces`` whether it judges faces (grouped with
     :func:`dda.kernels.faces.face_index` and ``face_cos``); ``rules`` the passes' ``(rtol, floor,
-    cycle_tension, relax_after, patience, retry_patience, secant_from, cycle_local)`` (the fully
+    cycle_tension, relax_after, patience, retry_patience, secant_from, cycle_measure)`` (the fully
     implicit method's patience of its predictor and of its retry, :func:`dda.solvers.open_close.
-    predictor_patience`, and legacy DDA's secant lag, ``LAG_SECANT_FROM``, and cycle limit,
-    ``CYCLE_LOCAL``); the rest are the arguments of the kernels named in the module
-    docstring, under their names there.
+    predictor_patience`, and legacy DDA's secant lag, ``LAG_SECANT_FROM``, and cycle limit's
+    measure, :func:`dda.solvers.open_close.cycle_measure`); the rest are the arguments of the
+    kernels named in the module docstring, under their names there.
 
     Returns
     -------
@@ -191,7 +191,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         face = np.full(m, -1, dtype=np.int64)
     # ---- the solver's step (dda.solvers.legacy._dense_step, dda.solvers.newton._dense_step)
     (rtol, floor, cycle_tension, relax_after, patience, retry_patience, secant_from,
-     cycle_local) = rules
+     cycle_measure) = rules
     norms = e0
     if newton:
         (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping, t_n, t_s,
@@ -218,7 +218,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
     else:
         (status, passes, d, state, t_n, t_s, g_se_out, slip_out,
          sliding_out) = legacy_dense_step(max_passes, band, rtol, floor, cycle_tension,
-                                          relax_after, np.int64(0), secant_from, cycle_local,
+                                          relax_after, np.int64(0), secant_from, cycle_measure,
                                           block_k, block_f, d_known, n,
                                           block_base, block_step, free_blocks, pair_base,
                                           pair_step, side_row, side_block, keep, reduced, rows,

@@ -19,6 +19,7 @@ from dda.profiling import count_solve, section
 from dda.solvers import open_close as oc_rules
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.open_close import (
+    cycle_measure,
     dense_arguments,
     dense_eligible,
     dense_failure,
@@ -46,9 +47,11 @@ class LegacyPullBack(NonlinearSolver):
         Measure OPEN-CLOSE's cycle rule on a contact's own blocks: a contact that cycles
         between open and closed is held closed while it pulls by at most ``CYCLE_TENSION``
         of the largest normal force on either of its blocks (the smaller), instead of the
-        scene's largest. Right where a heavy block far away would hold a light block's
-        contact, and costly elsewhere (:mod:`dda.solvers.open_close` has the numbers).
-        None (the default): :data:`dda.solvers.open_close.CYCLE_LOCAL`, read at each step.
+        largest in its group of free blocks that touch each other through closed contacts
+        (False; where all touch, the scene's largest). Both are right where a heavy block
+        far away would hold a light block's contact; the own blocks' measure is costly
+        elsewhere (:mod:`dda.solvers.open_close` has the numbers). None (the default):
+        :data:`dda.solvers.open_close.CYCLE_LOCAL`, read at each step.
 
     Examples
     --------
@@ -82,10 +85,9 @@ class LegacyPullBack(NonlinearSolver):
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element
-        local = local_cycle_limit(self)
         if LEGACY_DENSE_STEP and dense_eligible(problem):
-            return _dense_step(problem, local)
-        oc = open_close(problem, explicit=True, cycle_local=local)
+            return _dense_step(problem, cycle_measure(self))
+        oc = open_close(problem, explicit=True, cycle_local=local_cycle_limit(self))
         if not oc.converged:
             return StepSolution(None, None, False, oc.passes, oc.passes, oc.reason)
         if len(el) == 0:
@@ -120,7 +122,7 @@ def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
                       kernel_history_dict(history, g_se, slip, sliding))
 
 
-def _dense_step(problem: StepProblem, cycle_local: bool) -> StepSolution:
+def _dense_step(problem: StepProblem, measure: int) -> StepSolution:
     """:meth:`LegacyPullBack.solve_step` on a dense system with the built-in laws: the
     pull-back, every OPEN-CLOSE pass and the step's end in one kernel call (the same
     decisions and numbers as the passes' kernel between the start's and the end's). Its time
@@ -130,7 +132,7 @@ def _dense_step(problem: StepProblem, cycle_local: bool) -> StepSolution:
     with section("solve"):
         status, passes, d, state, t_n, t_s, g_se, slip, sliding = legacy_dense_step(
             problem.max_open_close, float(oc_rules.SETTLE_BAND), *pass_rules(),
-            oc_rules.LAG_SECANT_FROM, bool(cycle_local),
+            oc_rules.LAG_SECANT_FROM, int(measure),
             *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
             *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el))
     count_solve(passes)

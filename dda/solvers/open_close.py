@@ -70,25 +70,33 @@ the shaken cut slope of ``examples/jointed_slope.py`` they pull 1e-4 to 1e-2 of 
 normal force closed and penetrate 1e-4 to 7e-2 of it (as a spring force) open, and were most of
 its cut steps.
 
-The largest normal force is the pass's, the whole scene's, and that is a known wrong answer
-where blocks of very different loads share a scene: a 0.5 x 1 m block sliding and tipping on
-a cohesive 30 degree incline moves 87.2 mm in 0.5 s alone and 15.1 mm when a heavy block
-stands 20 m away touching nothing of it (its contact held closed pulling up to 8% of its
-weight; ``tests/test_open_close_cycles.py``). With ``CYCLE_LOCAL`` (or
-``LegacyPullBack(cycle_local=True)`` for one solver) legacy DDA measures the limit on the
-contact's own blocks instead (the smaller of their largest normal forces; a
-block whose motion is known does not count), as the fully implicit method's iterations do
-(:data:`dda.solvers.newton.HOLD_CYCLING`): 87.2 and 87.4 mm (the 0.2% left is
-``NORMAL_FORCE_FLOOR``, which stays the scene's; measured on the own blocks it cut the
-first steps of ``tests/stability``'s tower). It is off by default for what it costs: on the
-shaken cut slope the contacts that cycle pull a median 14% of the largest normal force on
-their own blocks and 0.01% of the scene's, so the old limit holds nearly all of them and the
-new one 9% of them, and the example's 0.3 s took 2,172 steps and 73 cuts instead of 990 and
-47; the slope's held static steps no longer settled in 400 (``dda.settling`` keeps the
-scene's measure; ``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own
-blocks"). The held tension does change answers: held at up to 2% of its blocks' own largest
-force the incline's block moves 81.4 mm, at 10% 17.7. The fully implicit method's predictor
-keeps the scene's measure either way: its iterations judge every contact again.
+Which largest normal force? The pass's, the whole scene's, is a known wrong answer where
+blocks of very different loads share a scene: a 0.5 x 1 m block sliding and tipping on a
+cohesive 30 degree incline moves 87.2 mm in 0.5 s alone and 15.1 mm when a heavy block stands
+20 m away touching nothing of it (its contact held closed pulling up to 8% of its weight;
+``tests/test_open_close_cycles.py``). So legacy DDA measures it over the contact's *group*
+(``CYCLE_GROUP``, the default): the free blocks joined to its own through contacts closed in
+the pass (a block whose motion is known joins none). Where every free block touches the others
+that is the scene's largest, and the runs are those of the scene-wide rule to the bit (the
+regression set of ``benchmarks/regression_set.py``, 42 of 42); a block that touches only
+fixed ones is measured on its own forces: the far block leaves the incline's block at 87.4
+mm. On the shaken cut slope of ``examples/jointed_slope.py``, where a block at times touches
+only the base or the wall, the 0.3 s took 1,119 steps and 43 cuts instead of 990 and 47, in
+the same CPU time. With ``CYCLE_LOCAL`` (or ``LegacyPullBack(cycle_local=True)`` for one
+solver) legacy DDA measures the limit on the contact's own blocks instead (the smaller of
+their largest normal forces), as the fully implicit method's iterations do
+(:data:`dda.solvers.newton.HOLD_CYCLING`): 87.2 and 87.4 mm too (the 0.2% left is
+``NORMAL_FORCE_FLOOR``, which stays the scene's; measured on the own blocks it cut the first
+steps of ``tests/stability``'s tower). It is off by default for what it costs: on the shaken
+cut slope the contacts that cycle pull a median 14% of the largest normal force on their own
+blocks and 0.01% of the scene's, so the group's limit holds nearly all of them and the own
+blocks' 9% of them, and the example's 0.3 s took 2,172 steps and 73 cuts; the slope's held
+static steps no longer settled in 400 (``dda.settling`` keeps the group's measure;
+``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own blocks"), and its face
+came no nearer Newton's at any dt. The held tension does change answers: held at up to 2% of
+its blocks' own largest force the incline's block moves 81.4 mm, at 10% 17.7. The fully
+implicit method's predictor keeps the scene's measure either way: its iterations judge every
+contact again.
 
 From pass ``LAG_RELAX_AFTER`` on, a lagged normal force that oscillates (its error changed sign
 since the last pass) is under-relaxed, ``N_lag <- (N_lag + N) / 2``: where a sliding contact's
@@ -171,8 +179,12 @@ from dda.contact.contacts import OPEN, SLIP, STICK
 from dda.contact.tangent import SPRING_TERMS
 from dda.kernels.dense_passes import CONVERGED, NOT_SETTLED, SINGULAR, dense_passes
 from dda.kernels.dense_passes import single_switch as _single_switch
+from dda.kernels.open_close import CYCLE_BLOCKS as _CYCLE_BLOCKS
+from dda.kernels.open_close import CYCLE_GROUP as _CYCLE_GROUP
+from dda.kernels.open_close import CYCLE_SCENE as _CYCLE_SCENE
 from dda.kernels.open_close import (
     REMEMBER_FROM_FLIPS,
+    _group_force,
     as_float64,
     kernel_history,
     kernel_history_dict,
@@ -187,9 +199,10 @@ from dda.solvers.base import StepProblem
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve
 
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
-           "GAP_ROUND_OFF", "CYCLE_TENSION", "CYCLE_LOCAL", "LAG_RELAX_AFTER", "LAG_SECANT_FROM",
-           "LAG_PATIENCE", "RETRY_PATIENCE", "SETTLE_BAND", "predictor_patience", "round_off_gap",
-           "next_lag", "local_cycle_limit"]
+           "GAP_ROUND_OFF", "CYCLE_TENSION", "CYCLE_LOCAL", "CYCLE_GROUP", "LAG_RELAX_AFTER",
+           "LAG_SECANT_FROM", "LAG_PATIENCE", "RETRY_PATIENCE", "SETTLE_BAND",
+           "predictor_patience", "round_off_gap", "next_lag", "local_cycle_limit",
+           "cycle_measure"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
@@ -204,6 +217,10 @@ CYCLE_TENSION = 1e-2
 # right where a heavy block far away held a light block's contact, and off by default for what
 # it costs elsewhere)
 CYCLE_LOCAL = False
+# legacy DDA, without CYCLE_LOCAL: the limit measured over the contact's group of free blocks
+# that touch through closed contacts (the scene's largest where they all touch; a block far
+# away that touches only fixed ones is a group of its own); False: over the whole pass
+CYCLE_GROUP = True
 # the pass from which a sliding contact's lagged normal force is under-relaxed
 LAG_RELAX_AFTER = 6
 # legacy DDA: the pass from which an oscillating lagged normal force takes the secant step
@@ -259,14 +276,14 @@ def open_close(problem: StepProblem, explicit: bool,
     changes that move less force than this fraction of the largest normal force on the
     lighter loaded of the contact's blocks do not take another pass. ``cycle_local`` (default:
     ``CYCLE_LOCAL`` for legacy DDA, False for the predictor) measures the cycle rule's limit
-    on each contact's own blocks.
+    on each contact's own blocks; without it legacy DDA measures it over the contact's group
+    of touching free blocks (``CYCLE_GROUP``) and the predictor over the pass.
     """
     if settle_friction is None:
         settle_friction = explicit
     if band is None:
         band = SETTLE_BAND if explicit else 0.0
-    if cycle_local is None:
-        cycle_local = explicit and CYCLE_LOCAL
+    measure = _cycle_measure(explicit, cycle_local)
     patience = predictor_patience(explicit, settle_friction)
     el = problem.element
     if len(el) == 0:  # no contacts: one linear solve settles the step
@@ -279,7 +296,7 @@ def open_close(problem: StepProblem, explicit: bool,
     if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
                                 settle_friction, band, patience, secant_from, remember_open,
-                                bool(cycle_local))
+                                measure)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -301,7 +318,7 @@ def open_close(problem: StepProblem, explicit: bool,
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         new_state, t_n = _next_states(el, state, history, judged, dgs, t_slip, held, gap_tol)
         lag_ok = _lag_settled(el, state, new_state, judged, t_n, t_n_lag, flips, pinned,
-                              problem.free if cycle_local else None)
+                              problem.free, measure)
         flips += (state != OPEN) != (new_state != OPEN)
         # settled when no state changes and every sliding contact's friction came from this
         # pass's normal force; for the fully implicit method's predictor a switch between
@@ -352,7 +369,7 @@ def _solve_pass(problem, k, f):
 
 
 def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle_friction,
-                     band, patience, secant_from, remember_open, cycle_local) -> OpenCloseResult:
+                     band, patience, secant_from, remember_open, measure) -> OpenCloseResult:
     """The iteration of :func:`open_close` with the built-in laws' compiled passes
     (:mod:`dda.kernels.open_close`): the same rules in the same order, the same results."""
     m = len(el)
@@ -361,7 +378,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     g_se, _, sliding = kernel_history(history, m)
     if dense_eligible(problem):
         return _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
-                      patience, secant_from, remember_open, cycle_local,
+                      patience, secant_from, remember_open, measure,
                       (g_se, sliding, as_float64(t_stick)))
     pn, kn, ps, length, gap0, e_row, i_row, t_stick = (
         np.ascontiguousarray(a, dtype=f64) for a in (
@@ -394,7 +411,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
                 state, held, judged, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips,
                 pinned, calm, gap_tol, kn, ps, length, *laws, g_se, sliding, bj, bk, free,
                 settle_friction, float(band), passes, *rules, secant_from, remember_open,
-                cycle_local)
+                measure)
         if PASS_LOG is not None:
             PASS_LOG.append(_why(state, new_state, lag_ok))
         if done:
@@ -462,6 +479,21 @@ def local_cycle_limit(solver) -> bool:
     return bool(CYCLE_LOCAL if flag is None else flag)
 
 
+def cycle_measure(solver) -> int:
+    """What legacy DDA's ``solver`` measures the cycle rule's limit against, as the kernels
+    take it (:data:`dda.kernels.open_close.CYCLE_BLOCKS` with :func:`local_cycle_limit`, else
+    ``CYCLE_GROUP``, or ``CYCLE_SCENE`` with the module's ``CYCLE_GROUP`` off)."""
+    return _cycle_measure(True, local_cycle_limit(solver))
+
+
+def _cycle_measure(explicit: bool, cycle_local: bool | None) -> int:
+    if cycle_local is None:
+        cycle_local = explicit and CYCLE_LOCAL
+    if cycle_local:
+        return _CYCLE_BLOCKS
+    return _CYCLE_GROUP if explicit and CYCLE_GROUP else _CYCLE_SCENE
+
+
 def pass_rules(patience: int | None = None) -> tuple:
     """The passes' rules as the kernels take them: ``NORMAL_FORCE_RTOL``,
     ``NORMAL_FORCE_FLOOR``, ``CYCLE_TENSION``, ``LAG_RELAX_AFTER`` and the patience
@@ -489,7 +521,7 @@ def dense_failure(status: int, passes: int) -> str:
 
 
 def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, patience,
-           secant_from, remember_open, cycle_local, start) -> OpenCloseResult:
+           secant_from, remember_open, measure, start) -> OpenCloseResult:
     """:func:`_compiled_passes` on a dense system: every pass in one kernel call
     (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
     round-off). ``start`` is the step's pulled-back ``g_se``, ``sliding`` and stick forces.
@@ -497,7 +529,7 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, pa
     with section("solve"):
         status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
             problem.max_open_close, bool(settle_friction), float(band), *pass_rules(patience),
-            secant_from, remember_open, cycle_local, *dense_arguments(problem), *start,
+            secant_from, remember_open, measure, *dense_arguments(problem), *start,
             np.asarray(state, dtype=np.int8),
             np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
     count_solve(passes)
@@ -513,11 +545,12 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, pa
 _NO_KEEP = np.zeros(0, dtype=np.int64)
 
 
-def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free):
+def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free, measure):
     """(m,) the contacts whose lagged normal force is settled; applies the cycle rule
-    (``new_state`` and ``pinned`` change in place) with its limit measured on each contact's
-    own blocks (``free``: the blocks with unknowns), or with ``free`` None on the pass's
-    largest normal force (the fully implicit method's predictor)."""
+    (``new_state`` and ``pinned`` change in place) with its limit measured as ``measure``
+    says (:func:`_cycle_measure`): over each contact's group of touching free blocks or on
+    its own blocks (``free``: the blocks with unknowns), or on the pass's largest normal
+    force (the fully implicit method's predictor)."""
     # a sliding contact's friction came from the last pass's normal force: the pass only
     # counts when that force is the one this pass ended with (forces below NORMAL_FORCE_FLOOR
     # of the step's largest matter to no block: a barely touching contact would otherwise
@@ -526,16 +559,21 @@ def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free):
     lag_ok = np.abs(t_n - t_n_lag) <= NORMAL_FORCE_RTOL * np.maximum(
         np.abs(t_n), np.abs(t_n_lag)) + NORMAL_FORCE_FLOOR * largest
     # a contact that has been opened and closed again in this step's passes and would open
-    # once more, pulled by less than CYCLE_TENSION of the largest normal force (the pass's,
-    # or its own blocks'), stays closed (open it penetrates, closed it pulls: alone it would
-    # cycle until the pass limit), and while it pulls its lagged normal force does not hold
-    # the iteration
+    # once more, pulled by less than CYCLE_TENSION of the largest normal force (in its group,
+    # on its own blocks, or in the pass), stays closed (open it penetrates, closed it pulls:
+    # alone it would cycle until the pass limit), and while it pulls its lagged normal force
+    # does not hold the iteration
     cycling = (flips >= 2) & (state != OPEN) & (new_state == OPEN)
     if cycling.any():
-        if free is None:
-            limit = CYCLE_TENSION * largest
-        else:
+        if measure == _CYCLE_BLOCKS:
             limit = CYCLE_TENSION * _largest_on_blocks(el, t_n, free)
+        elif measure == _CYCLE_GROUP:
+            limit = _group_force(np.asarray(t_n, dtype=np.float64), np.asarray(state),
+                                 np.asarray(el.bj, dtype=np.int64),
+                                 np.asarray(el.bk, dtype=np.int64),
+                                 np.asarray(free, dtype=np.bool_), CYCLE_TENSION)
+        else:
+            limit = CYCLE_TENSION * largest
         cycling &= el.judge_stiffness * gap <= limit
         new_state[cycling] = state[cycling]
         pinned |= cycling
