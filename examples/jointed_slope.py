@@ -102,7 +102,8 @@ mm (legacy DDA alike; 2026-12-07).
 ``--cohesion PA`` gives the joints a cohesion (``CoulombSingle(phi=35, cohesion=PA)``). At 1
 MPa the slope is glued: legacy DDA 1,712 steps, 88 cut, 26 s, the face blocks 0.40 / 0.89 mm;
 Newton 13,592 steps, 495 cut, 260 s of CPU, 0.47 / 1.20 mm (runs two at a time on two cores).
-At 10 kPa legacy DDA moves them 9.56 / 10.62 mm (1,424 steps, 44 cut). Newton runs these
+At 10 kPa legacy DDA moves them 7.11 / 7.94 mm (923 steps, 41 cut; 9.56 / 10.62 mm with
+the scene-wide cycle limit it had until 2026-12-07; Newton 11.29 / 13.18 mm). Newton runs these
 because it holds closed a contact that cycles between open and closed at a small pull
 (:data:`dda.solvers.newton.HOLD_CYCLING`): before, it stopped at t = 0.025 s at 1 MPa and
 took 14,903 steps for 0.1 s at 10 kPa. It cuts more steps than legacy DDA because it holds
