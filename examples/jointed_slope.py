@@ -15,7 +15,7 @@ vectorized functions round some last bits otherwise, 990 steps, 47 cut, 21.97 / 
 ``dda.contact.detection``, which taken at every step sent this run, as stiff as it is for its
 dt, another way: 1,210 steps, 43 cut, 21.97 / 27.58 mm); since legacy DDA measures its cycle
 rule over a contact's group of touching blocks (``dda.solvers.open_close.CYCLE_GROUP``, the
-same day), 1,119 steps, 43 cut, 22.01 / 26.65 mm in 24 s. ``--solver newton``: 801 steps, 21
+same day), 910 steps, 41 cut, 21.86 / 27.27 mm in 24 s. ``--solver newton``: 801 steps, 21
 cut, 22.35 / 26.52 mm (77 s beside two other runs on two cores; 38 s for 656 steps in an
 earlier version, alone); on the AVX-512 machine 710 steps, 32 cut, 21.90 / 26.03 mm (42 s
 of CPU beside another run; 702, 27, 21.77 / 26.13 mm before Newton held contacts that cycle,
@@ -90,9 +90,9 @@ blocks 22.7 / 28.5 mm and 22.8 / 28.1 mm (median / most).
 (``Simulation(start="settled")``, :mod:`dda.settling`): 11 static steps with the joints held,
 74 more with their own friction (some blocks slide off the back wall they hung on while
 held, 0.61 mm at most), some 4 s. From rest the blocks drop onto their springs and bounce.
-The 0.3 s then take legacy DDA 746 steps, 22 cut (from rest 1,119, 43 cut), and Newton 567,
+The 0.3 s then take legacy DDA 746 steps, 22 cut (from rest 910, 41 cut), and Newton 567,
 21 cut (710, 32); the face blocks move 21.84 / 38.87 mm and 21.77 / 38.73 mm (median / most;
-from rest 22.01 / 26.65 and 21.90 / 26.03): the median alike, the block that moves most 12
+from rest 21.86 / 27.27 and 21.90 / 26.03): the median alike, the block that moves most 12
 mm further under both solvers, as its contacts start at their friction limit (README, "A
 dynamic run's start"). The settled start is also the one whose answer holds as dt falls:
 at 2e-3 / 2.5e-4 / 6.25e-5 s Newton's face moves 21.77 / 38.73, 22.79 / 38.56 and 21.95 /
@@ -102,8 +102,8 @@ mm (legacy DDA alike; 2026-12-07).
 ``--cohesion PA`` gives the joints a cohesion (``CoulombSingle(phi=35, cohesion=PA)``). At 1
 MPa the slope is glued: legacy DDA 1,712 steps, 88 cut, 26 s, the face blocks 0.40 / 0.89 mm;
 Newton 13,592 steps, 495 cut, 260 s of CPU, 0.47 / 1.20 mm (runs two at a time on two cores).
-At 10 kPa legacy DDA moves them 7.11 / 7.94 mm (923 steps, 41 cut; 9.56 / 10.62 mm with
-the scene-wide cycle limit it had until 2026-12-07; Newton 11.29 / 13.18 mm). Newton runs these
+At 10 kPa legacy DDA moves them 9.56 / 10.62 mm (1,216 steps, 51 cut; 1,424 steps, 44 cut
+with the scene-wide cycle limit it had until 2026-12-07; Newton 11.29 / 13.18 mm). Newton runs these
 because it holds closed a contact that cycles between open and closed at a small pull
 (:data:`dda.solvers.newton.HOLD_CYCLING`): before, it stopped at t = 0.025 s at 1 MPa and
 took 14,903 steps for 0.1 s at 10 kPa. It cuts more steps than legacy DDA because it holds

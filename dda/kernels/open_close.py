@@ -361,9 +361,10 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     (:func:`next_lag_force`, which takes ``relax_after``, ``secant_from`` and
     ``remember_open``) change in place. The cycle rule's limit is ``cycle_tension`` of the
     largest normal force in the contact's group of touching free blocks (``cycle_measure``
-    ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`), on its own blocks
-    (``CYCLE_BLOCKS``) or in the pass (``CYCLE_SCENE``: the fully implicit method's
-    predictor, whose iterations judge every contact again);
+    ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`; the lagged force's floor
+    ``floor`` is then the group's too), on its own blocks (``CYCLE_BLOCKS``) or in the pass
+    (``CYCLE_SCENE``: the fully implicit method's predictor, whose iterations judge every
+    contact again);
     the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
     never), whatever the friction and lagged forces
     (:func:`dda.solvers.open_close.predictor_patience`).
@@ -399,14 +400,18 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     for i in range(m):
         largest = _np_max(largest, abs(t_n[i]))
         cycling = cycling or (flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN)
-    if cycling and cycle_measure == CYCLE_BLOCKS:
+    group = np.zeros(0)  # the largest normal force in each contact's group
+    if cycle_measure == CYCLE_GROUP:
+        group = _group_force(t_n, state, bj, bk, free, 1.0)
+        if cycling:
+            local = cycle_tension * group
+    elif cycling and cycle_measure == CYCLE_BLOCKS:
         local = _local_force(t_n, bj, bk, free, cycle_tension)
-    elif cycling and cycle_measure == CYCLE_GROUP:
-        local = _group_force(t_n, state, bj, bk, free, cycle_tension)
     lag_ok = np.empty(m, dtype=np.bool_)
     for i in range(m):
         lag_ok[i] = abs(t_n[i] - t_n_lag[i]) <= rtol * _np_max(
-            abs(t_n[i]), abs(t_n_lag[i])) + floor * largest
+            abs(t_n[i]), abs(t_n_lag[i])) + floor * (
+                group[i] if cycle_measure == CYCLE_GROUP else largest)
         if (cycling and flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN
                 and pn[i] * gap[i] <= (cycle_tension * largest if cycle_measure == CYCLE_SCENE
                                        else local[i])):

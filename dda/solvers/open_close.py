@@ -49,7 +49,8 @@ Three rules keep the iteration honest (each was needed; tests/test_dynamics.py s
 - the pass only counts as settled when every sliding contact's lagged normal force agrees with
   the pass's own within ``NORMAL_FORCE_RTOL`` (otherwise a one-pass penetration spike sets the
   friction, and a sliding block decelerates at several times mu g), give or take
-  ``NORMAL_FORCE_FLOOR`` of the pass's largest normal force;
+  ``NORMAL_FORCE_FLOOR`` of the largest normal force (legacy DDA: in the contact's group,
+  below; the predictor: the pass's);
 - when a pass brings back a set of states already tried, only the most violated contact is
   switched (an active-set step), which ends the two-pass cycles of a block bouncing off a
   stiff contact; and legacy's explicit rule no longer spares the contacts of that cycle the
@@ -70,26 +71,28 @@ the shaken cut slope of ``examples/jointed_slope.py`` they pull 1e-4 to 1e-2 of 
 normal force closed and penetrate 1e-4 to 7e-2 of it (as a spring force) open, and were most of
 its cut steps.
 
-Which largest normal force? The pass's, the whole scene's, is a known wrong answer where
-blocks of very different loads share a scene: a 0.5 x 1 m block sliding and tipping on a
-cohesive 30 degree incline moves 87.2 mm in 0.5 s alone and 15.1 mm when a heavy block stands
-20 m away touching nothing of it (its contact held closed pulling up to 8% of its weight;
+Which largest normal force? The pass's, the whole scene's, is a known wrong answer where blocks
+of very different loads share a scene: a 0.5 x 1 m block sliding and tipping on a cohesive 30
+degree incline moves 87.2 mm in 0.5 s alone and 15.1 mm when a heavy block stands 20 m away
+touching nothing of it (its contact held closed pulling up to 8% of its weight;
 ``tests/test_open_close_cycles.py``). So legacy DDA measures it over the contact's *group*
 (``CYCLE_GROUP``, the default): the free blocks joined to its own through contacts closed in
 the pass (a block whose motion is known joins none). Where every free block touches the others
-that is the scene's largest, and the runs are those of the scene-wide rule to the bit (the
-regression set of ``benchmarks/regression_set.py``, 42 of 42); a block that touches only
-fixed ones is measured on its own forces: the far block leaves the incline's block at 87.4
-mm. On the shaken cut slope of ``examples/jointed_slope.py``, where a block at times touches
-only the base or the wall, the 0.3 s took 1,119 steps and 43 cuts instead of 990 and 47, in
-the same CPU time. With ``CYCLE_LOCAL`` (or ``LegacyPullBack(cycle_local=True)`` for one
-solver) legacy DDA measures the limit on the contact's own blocks instead (the smaller of
-their largest normal forces), as the fully implicit method's iterations do
-(:data:`dda.solvers.newton.HOLD_CYCLING`): 87.2 and 87.4 mm too (the 0.2% left is
-``NORMAL_FORCE_FLOOR``, which stays the scene's; measured on the own blocks it cut the first
-steps of ``tests/stability``'s tower). It is off by default for what it costs: on the shaken
-cut slope the contacts that cycle pull a median 14% of the largest normal force on their own
-blocks and 0.01% of the scene's, so the group's limit holds nearly all of them and the own
+that is the scene's largest, and a run is the scene-wide rule's to the bit (41 of the 42 runs
+of ``benchmarks/regression_set.py``; its 31-block shaken cut slope, whose blocks part at times,
+took 245 steps and 9 cuts instead of 267 and 11); a block that touches only fixed ones is
+measured on its own forces. The lagged normal force's floor (``NORMAL_FORCE_FLOOR``) is
+measured the same way, and the far block leaves the incline's block as it is alone, to 1e-14 of
+its motion. On the shaken cut slope of ``examples/jointed_slope.py``, where a block at times
+touches only the base or the wall, the 0.3 s took 910 steps and 41 cuts instead of 990 and 47,
+in the same CPU time. With ``CYCLE_LOCAL`` (or ``LegacyPullBack(cycle_local=True)`` for one
+solver) legacy DDA measures the limit on the contact's own blocks instead (the smaller of their
+largest normal forces), as the fully implicit method's iterations do
+(:data:`dda.solvers.newton.HOLD_CYCLING`): 87.2 and 87.4 mm (the 0.2% left is
+``NORMAL_FORCE_FLOOR``, which stays the scene's with it; measured on the own blocks it cut the
+first steps of ``tests/stability``'s tower). It is off by default for what it costs: on the
+shaken cut slope the contacts that cycle pull a median 14% of the largest normal force on their
+own blocks and 0.01% of the scene's, so the group's limit holds nearly all of them and the own
 blocks' 9% of them, and the example's 0.3 s took 2,172 steps and 73 cuts; the slope's held
 static steps no longer settled in 400 (``dda.settling`` keeps the group's measure;
 ``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's own blocks"), and its face
@@ -206,7 +209,8 @@ __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_F
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
-# ... and the absolute part of that test, as a fraction of the pass's largest normal force
+# ... and the absolute part of that test, as a fraction of the largest normal force (legacy
+# DDA: in the contact's group, CYCLE_GROUP; the predictor, and with CYCLE_LOCAL: the pass's)
 NORMAL_FORCE_FLOOR = 1e-4
 # a linearized gap within this fraction of the edge's length of zero keeps the contact's state
 GAP_ROUND_OFF = 1e-12
@@ -553,9 +557,14 @@ def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free, m
     force (the fully implicit method's predictor)."""
     # a sliding contact's friction came from the last pass's normal force: the pass only
     # counts when that force is the one this pass ended with (forces below NORMAL_FORCE_FLOOR
-    # of the step's largest matter to no block: a barely touching contact would otherwise
-    # hold the iteration for many passes)
+    # of the largest, in the group or the pass, matter to no block: a barely touching contact
+    # would otherwise hold the iteration for many passes)
     largest = float(np.max(np.abs(t_n), initial=0.0))
+    if measure == _CYCLE_GROUP:  # the largest in each contact's group, the floor's too
+        largest = _group_force(np.asarray(t_n, dtype=np.float64), np.asarray(state),
+                               np.asarray(el.bj, dtype=np.int64),
+                               np.asarray(el.bk, dtype=np.int64),
+                               np.asarray(free, dtype=np.bool_), 1.0)
     lag_ok = np.abs(t_n - t_n_lag) <= NORMAL_FORCE_RTOL * np.maximum(
         np.abs(t_n), np.abs(t_n_lag)) + NORMAL_FORCE_FLOOR * largest
     # a contact that has been opened and closed again in this step's passes and would open
@@ -567,11 +576,6 @@ def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free, m
     if cycling.any():
         if measure == _CYCLE_BLOCKS:
             limit = CYCLE_TENSION * _largest_on_blocks(el, t_n, free)
-        elif measure == _CYCLE_GROUP:
-            limit = _group_force(np.asarray(t_n, dtype=np.float64), np.asarray(state),
-                                 np.asarray(el.bj, dtype=np.int64),
-                                 np.asarray(el.bk, dtype=np.int64),
-                                 np.asarray(free, dtype=np.bool_), CYCLE_TENSION)
         else:
             limit = CYCLE_TENSION * largest
         cycling &= el.judge_stiffness * gap <= limit
