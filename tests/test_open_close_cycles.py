@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import dda
-from dda.contact import CoulombLike
+from dda.contact import CoulombLike, CoulombSingle, JointMaterial
 from dda.registry import make_solver
 from dda.solvers import LegacyPullBack, open_close
 from tests.conftest import stack_scene
@@ -26,8 +26,10 @@ def test_a_touching_contact_does_not_cycle_until_the_pass_limit():
     assert np.max(r.stats["open_close_passes"]) <= 8
 
 
-@pytest.mark.parametrize("solver, cuts, steps", [("legacy", 6, 215), ("newton", 1, 160)])
-def test_the_shaken_cut_slope_settles_its_contacts_at_the_step_asked_for(solver, cuts, steps):
+@pytest.mark.parametrize("solver, local, cuts, steps", [
+    ("legacy", None, 6, 215), ("legacy", True, 7, 215), ("newton", None, 1, 160)])
+def test_the_shaken_cut_slope_settles_its_contacts_at_the_step_asked_for(solver, local, cuts,
+                                                                          steps, monkeypatch):
     """The shaken cut slope of tests/stability (0.3 s, dt 2e-3 asked for): a face
     contact whose friction load opens it cycles open / closed (its lagged normal force
     oscillates: N -> a - 1.05 N), and without the cycle rule's 1% tension and the lag's
@@ -46,7 +48,11 @@ def test_the_shaken_cut_slope_settles_its_contacts_at_the_step_asked_for(solver,
     fix (three joint traces lost, three pairs of blocks merged). On the 31 blocks of the
     rock mass cut right: 6 OPEN-CLOSE cuts in 197 steps (legacy) and none in 150 (Newton);
     without the cycle rule and the lag's under-relaxation (``CYCLE_TENSION = 0``,
-    ``LAG_RELAX_AFTER`` never) 8 in 237 and 4 in 168."""
+    ``LAG_RELAX_AFTER`` never) 8 in 237 and 4 in 168. With the limit measured on a contact's
+    own blocks (``CYCLE_LOCAL``) the rule holds fewer of the light face blocks' cycles: 7 in
+    201 steps."""
+    if local is not None:
+        monkeypatch.setattr(open_close, "CYCLE_LOCAL", local)
     scene, dt, duration, _ = scenes.shaken_cut_slope()
     scene.set_joint(replace(scene.default_joint, restitution=1.0))
     sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver), max_open_close=30)
@@ -79,8 +85,6 @@ def test_a_slip_whose_friction_load_is_zero_is_not_a_reversal(solver, cuts, step
     pass: a cycle through an open pass, which the secant, taken on contacts closed in both
     passes, does not reach); over six cuts of the rock mass it takes 1,823 steps and 39 cuts
     to 1,175 and 32 (tests/test_secant_lag.py)."""
-    from dda.solvers import open_close
-
     monkeypatch.setattr(open_close, "LAG_SECANT_FROM", 0)
     scene, dt, duration, _ = scenes.shaken_cut_slope()
     sim = dda.Simulation(scene, dt=dt, solver=make_solver(solver), max_open_close=30)
@@ -124,7 +128,7 @@ def _far_block_moves(solver, law):
 @pytest.mark.parametrize("law", ["compiled", "numpy"])
 @pytest.mark.parametrize("solver, local, group, rtol", [
     ("newton", False, True, 1e-6),
-    ("legacy", True, True, 5e-3),
+    ("legacy", True, True, 1e-9),
     ("legacy", False, True, 1e-9),
     pytest.param("legacy", False, False, 5e-3, marks=pytest.mark.xfail(
         strict=True, reason="measured over the whole scene, legacy DDA's cycle limit is the "
@@ -137,16 +141,15 @@ def test_a_block_far_away_does_not_hold_a_contact_closed(solver, local, group, r
     forces on its own blocks, or in its group of touching free blocks: Newton's iterations do
     (its predictor's passes need not), and legacy DDA does, by default over the group
     (``CYCLE_GROUP``), with ``CYCLE_LOCAL`` on its own blocks. Measured against the scene's
-    largest normal force (``CYCLE_GROUP`` off, legacy DDA's rule before 2026-12-07),
-    legacy DDA holds the tipping block's cohesive contact closed and it moves 15.1 mm
-    against 87.2 mm alone (a review, 2026-12-07).
+    largest normal force (``CYCLE_GROUP`` off, legacy DDA's rule before 2026-12-07), legacy
+    DDA holds the tipping block's cohesive contact closed and it moves 15.1 mm against 87.2
+    mm alone (a review, 2026-12-07).
 
-    With ``CYCLE_LOCAL`` legacy DDA keeps 0.2% of a difference (87.37 against 87.16 mm):
-    its lagged normal force counts as settled within ``NORMAL_FORCE_FLOOR`` of the scene's
-    largest normal force (with that floor at 0 the two runs are the same to the bit;
-    measured against the contact's own blocks it cut the first steps of
-    ``tests/stability``'s tower). Over the group the floor is the group's too, and the two
-    runs differ by round-off (1e-14 of the motion)."""
+    The lagged normal force counts as settled within ``NORMAL_FORCE_FLOOR`` of the largest
+    normal force in the contact's group under either measure (of the scene's, ``CYCLE_LOCAL``
+    kept 0.2% of a difference, 87.37 against 87.16 mm; measured against the contact's own
+    blocks the floor cut the first steps of ``tests/stability``'s tower), and the two runs
+    differ by round-off (1e-11 of the motion)."""
     monkeypatch.setattr(open_close, "CYCLE_LOCAL", local)
     monkeypatch.setattr(open_close, "CYCLE_GROUP", group)
     moved = _far_block_moves(solver, law)
@@ -154,18 +157,75 @@ def test_a_block_far_away_does_not_hold_a_contact_closed(solver, local, group, r
     assert moved[1] == pytest.approx(moved[0], rel=rtol)
 
 
+def incline_on_a_heavy_block():
+    """The incline's block of ``incline_with_a_far_block`` (0.5 x 1 m, phi 20 degrees,
+    cohesion 4 kPa, 30 degrees: it slides and tips) on a free incline: an 8 m triangle of
+    the same rock (41 t a metre) resting on a fixed floor that holds it (phi 80 degrees,
+    cohesion 1 MPa). Returns the scene and the small block."""
+    from tests.test_cohesive_newton import ROCK
+
+    th = np.radians(30.0)
+    t = np.array([np.cos(th), np.sin(th)])
+    n = np.array([-t[1], t[0]])
+    floor = -4 * t[1]
+    scene = dda.Scene(gravity=9.81)
+    base = scene.add_block([(-6, floor - 1), (6, floor - 1), (6, floor), (-6, floor)], ROCK,
+                           fixed=True)
+    incline = scene.add_block([tuple(-4 * t), (4 * t[0], floor), tuple(4 * t)], ROCK)
+    small = scene.add_block([tuple(p) for p in (-.25 * t, .25 * t, .25 * t + n, -.25 * t + n)],
+                            ROCK)
+    scene.set_joint(JointMaterial(1e10, 1e10, CoulombSingle(phi=20.0, cohesion=4000.0)))
+    scene.set_joint(JointMaterial(1e10, 1e10, CoulombSingle(phi=80.0, cohesion=1e6)),
+                    (base, incline))
+    return scene, small
+
+
+@pytest.mark.parametrize("law", ["compiled", "numpy"])
+@pytest.mark.parametrize("local", [
+    True,
+    pytest.param(None, marks=pytest.mark.xfail(
+        strict=True, reason="legacy DDA's default measures the cycle limit over the "
+        "contact's group of touching blocks, whose largest force is the heavy incline's: "
+        "the block moves 5.0 mm against 31.1 mm (Newton); dda.solvers.open_close")),
+])
+def test_a_heavy_block_it_rests_on_does_not_hold_a_light_blocks_contact(local, law):
+    """The sliding and tipping block on a heavy free incline, 0.3 s: legacy DDA moves it as
+    the fully implicit method does, within 2% (30.88 mm against 31.05), measuring the cycle
+    rule's limit on the contact's own blocks (``cycle_local=True``). Measured over the group
+    of touching free blocks (the default) the group's largest normal force is the incline's
+    on its floor, 40 times the block's, and the block's cohesive contact, held closed
+    pulling up to 1% of it, moves 5.0 mm (13.0 against 85.8 mm in 0.5 s). The own blocks'
+    measure costs elsewhere (``dda.solvers.open_close``'s docstring), so it is not the
+    default: a known limit of legacy DDA's, kept here as an expected failure."""
+    moved = {}
+    for name, solver in (("newton", dda.solvers.NewtonRaphson()),
+                         ("legacy", LegacyPullBack(cycle_local=local))):
+        scene, small = incline_on_a_heavy_block()
+        if law == "numpy" and name == "legacy":
+            scene.set_joint(replace(scene.default_joint, friction=NumpyCohesive(20.0, 4000.0)))
+        sim = dda.Simulation(scene, dt=1e-3, solver=solver, max_open_close=30)
+        result = sim.run(0.3, progress=False)
+        moved[name] = np.hypot(*result.displacement(small)[-1])
+    assert moved["newton"] > 0.02
+    assert moved["legacy"] == pytest.approx(moved["newton"], rel=0.02)
+
+
 def test_legacy_dda_takes_the_local_cycle_limit_as_its_own_setting(monkeypatch):
     """``LegacyPullBack(cycle_local=True)`` is the module's switch for one solver: the same
     runs to the bit as with ``CYCLE_LOCAL``, whatever ``CYCLE_LOCAL`` says;
     ``cycle_local=False`` keeps the default measure, the contact's group (and the scene's
-    with ``CYCLE_GROUP`` off: the far block's 15.1 mm)."""
+    with ``CYCLE_GROUP`` off: the far block's 15.1 mm). The lagged force's floor is the
+    group's under either of the first two, so the far block leaves the incline's block as
+    it is alone."""
     assert open_close.CYCLE_LOCAL is False and open_close.CYCLE_GROUP is True
     by_setting = _far_block_moves(lambda: LegacyPullBack(cycle_local=True), "compiled")
-    assert by_setting[1] == pytest.approx(by_setting[0], rel=5e-3)
+    assert by_setting[1] == pytest.approx(by_setting[0], rel=1e-9)
+    grouped = _far_block_moves("legacy", "compiled")
+    assert grouped == _far_block_moves(lambda: LegacyPullBack(cycle_local=False), "compiled")
+    assert grouped[0] == by_setting[0] and grouped[1] == pytest.approx(grouped[0], rel=1e-9)
     monkeypatch.setattr(open_close, "CYCLE_LOCAL", True)
     assert _far_block_moves("legacy", "compiled") == by_setting
-    grouped = _far_block_moves(lambda: LegacyPullBack(cycle_local=False), "compiled")
-    assert grouped[0] == by_setting[0] and grouped[1] == pytest.approx(grouped[0], rel=5e-3)
+    assert _far_block_moves(lambda: LegacyPullBack(cycle_local=False), "compiled") == grouped
     monkeypatch.setattr(open_close, "CYCLE_GROUP", False)
     scene_wide = _far_block_moves(lambda: LegacyPullBack(cycle_local=False), "compiled")
     assert scene_wide[0] == by_setting[0] and scene_wide[1] < 0.5 * scene_wide[0]

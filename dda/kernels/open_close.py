@@ -360,11 +360,11 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     a row that changed no contact between open and closed) and ``lag_memory``
     (:func:`next_lag_force`, which takes ``relax_after``, ``secant_from`` and
     ``remember_open``) change in place. The cycle rule's limit is ``cycle_tension`` of the
-    largest normal force in the contact's group of touching free blocks (``cycle_measure``
-    ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`; the lagged force's floor
-    ``floor`` is then the group's too), on its own blocks (``CYCLE_BLOCKS``) or in the pass
-    (``CYCLE_SCENE``: the fully implicit method's predictor, whose iterations judge every
-    contact again);
+    largest normal force on the contact's own blocks (``cycle_measure`` ``CYCLE_BLOCKS``,
+    legacy DDA's default: :func:`_local_force`), in its group of touching free blocks
+    (``CYCLE_GROUP``: :func:`_group_force`) or in the pass (``CYCLE_SCENE``: the fully
+    implicit method's predictor, whose iterations judge every contact again); the lagged
+    force's floor ``floor`` is the group's under the first two, the pass's under the third;
     the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
     never), whatever the friction and lagged forces
     (:func:`dda.solvers.open_close.predictor_patience`).
@@ -401,17 +401,16 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
         largest = _np_max(largest, abs(t_n[i]))
         cycling = cycling or (flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN)
     group = np.zeros(0)  # the largest normal force in each contact's group
-    if cycle_measure == CYCLE_GROUP:
+    if cycle_measure != CYCLE_SCENE:
         group = _group_force(t_n, state, bj, bk, free, 1.0)
         if cycling:
-            local = cycle_tension * group
-    elif cycling and cycle_measure == CYCLE_BLOCKS:
-        local = _local_force(t_n, bj, bk, free, cycle_tension)
+            local = (cycle_tension * group if cycle_measure == CYCLE_GROUP
+                     else _local_force(t_n, bj, bk, free, cycle_tension))
     lag_ok = np.empty(m, dtype=np.bool_)
     for i in range(m):
         lag_ok[i] = abs(t_n[i] - t_n_lag[i]) <= rtol * _np_max(
             abs(t_n[i]), abs(t_n_lag[i])) + floor * (
-                group[i] if cycle_measure == CYCLE_GROUP else largest)
+                largest if cycle_measure == CYCLE_SCENE else group[i])
         if (cycling and flips[i] >= 2 and state[i] != _OPEN and new_state[i] == _OPEN
                 and pn[i] * gap[i] <= (cycle_tension * largest if cycle_measure == CYCLE_SCENE
                                        else local[i])):
