@@ -8,9 +8,10 @@ back what the steps would have written one by one: the committed state, the stat
 recorded steps and the step control's counts. The steps are the same to the bit as those
 :func:`dda.step.step` takes (``tests/test_compiled_run.py``).
 
-A batch is tried when the run has no checkpoint or callback (they see every step) and no
-writer but a :class:`dda.io.VTUWriter` that thins its series (a batch stops at each step whose
-frame it writes), the scene's blocks are plain (:attr:`dda.model.Model.plain_blocks`; a known
+A batch is tried when the run has no callback (it sees every step) and no writer but a
+:class:`dda.io.VTUWriter` that thins its series (a batch stops at each step whose frame it
+writes; and before each step after which the run writes its checkpoint, which the run takes
+the usual way), the scene's blocks are plain (:attr:`dda.model.Model.plain_blocks`; a known
 motion is worked out for the batch's steps first), no bolts, a dynamic analysis, the step
 control at its full dt with no search hint, and the step one :func:`dda.step.step` takes in
 one kernel call (:func:`dda.step.contact_step_arguments`). A batch stops before a step that
@@ -68,16 +69,18 @@ class StepRuns:
     sim : dda.Simulation
     result : the run's :class:`dda.result.Result`
     recorder : the run's :class:`dda.recorder.Recorder`
+    checkpoint_every : the run's ``checkpoint_every`` when it writes checkpoints, else None
     """
 
-    def __init__(self, sim, result, recorder):
+    def __init__(self, sim, result, recorder, checkpoint_every: int | None = None):
         self.sim, self.result, self.recorder = sim, result, recorder
+        self.checkpoint_every = checkpoint_every
         self.size = FIRST_BATCH
         self.wait = 0  # Python steps before the next try
         self.misses = 0  # batches in a row that took no step
 
     @staticmethod
-    def possible(sim, writer, checkpoint, callback) -> bool:
+    def possible(sim, writer, callback) -> bool:
         """Whether a run of ``sim`` with these may take batches at all."""
         model = sim.model
         # (a batch stands for dda.step.step and its one kernel call: a run whose step or
@@ -86,7 +89,7 @@ class StepRuns:
         # (a series of every step: a frame, in Python, after each step)
         thinned = writer is None or type(writer) is VTUWriter and (
             writer.every > 1 or writer.interval is not None or sim.record_every > 1)
-        return (COMPILED_RUN and thinned and checkpoint is None and callback is None
+        return (COMPILED_RUN and thinned and callback is None
                 and simulation.step is _STEP and step_module.contact_step is contact_step
                 and step_module.BLOCK_KERNELS and step_module.SMALL_STEP
                 and model.plain_blocks and model.bolts is None
@@ -101,7 +104,10 @@ class StepRuns:
         if self.wait > 0:
             self.wait -= 1
             return 0
-        steps, why = self._batch(t_end, bar)
+        room = self._room()
+        if room == 0:  # the next step writes the checkpoint: the run's to take (no miss)
+            return 0
+        steps, why = self._batch(t_end, bar, room)
         if steps == 0:
             self.misses += 1
             self.wait = min(MOST_WAIT, 2 ** (self.misses - 1))
@@ -111,7 +117,15 @@ class StepRuns:
                 self.wait = 1
         return steps
 
-    def _batch(self, t_end, bar):
+    def _room(self) -> int:
+        """The most steps a batch may take before the step after which the run writes its
+        checkpoint (every ``checkpoint_every`` accepted steps)."""
+        every = self.checkpoint_every
+        if every is None:
+            return MOST_BATCH
+        return every - 1 - self.sim.control.steps % every
+
+    def _batch(self, t_end, bar, room=MOST_BATCH):
         sim = self.sim
         model, control, advisor = sim.model, sim.control, sim.advisor
         dt = control.dt
@@ -138,10 +152,11 @@ class StepRuns:
         gravity = float(model.gravity or 0.0)
         free = model.free
         start = _time.perf_counter()
-        # whole steps of dt, none the run's last, and no more than reach the writer's next
-        # frame (the known motion of a step the batch does not take is work lost)
+        # whole steps of dt, none the run's last or a checkpoint's, and no more than reach
+        # the writer's next frame (the known motion of a step the batch does not take is
+        # work lost)
         size = _whole_steps(control, state.time, t_end,
-                            min(self.size, self._steps_to_frame(writing, state.time, dt)))
+                            min(self.size, room, self._steps_to_frame(writing, state.time, dt)))
         if size == 0:
             return 0, STEPS_DONE
         motions = _known_motions(model, state, dt, size) if model.moves_known else None

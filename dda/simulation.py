@@ -446,8 +446,8 @@ class Simulation:
         after a step when ``interrupts`` (:class:`dda.runtime.Interrupts`) got a signal."""
         settings = self.settings
         bar = next((w for w in watchers if isinstance(w, ProgressBar)), None)
-        runs = (StepRuns(self, result, recorder)
-                if StepRuns.possible(self, writer, checkpoint,
+        runs = (StepRuns(self, result, recorder, None if checkpoint is None else checkpoint[1])
+                if StepRuns.possible(self, writer,
                                      next((w for w in watchers if w is not bar), None))
                 else None)
         while self.committed.time < t_end - 1e-12 * max(1.0, t_end):
