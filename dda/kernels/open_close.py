@@ -360,9 +360,9 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     a row that changed no contact between open and closed) and ``lag_memory``
     (:func:`next_lag_force`, which takes ``relax_after``, ``secant_from`` and
     ``remember_open``) change in place. The cycle rule's limit is ``cycle_tension`` of the
-    largest normal force on the contact's own blocks (``cycle_measure`` ``CYCLE_BLOCKS``,
-    legacy DDA's default: :func:`_local_force`), in its group of touching free blocks
-    (``CYCLE_GROUP``: :func:`_group_force`) or in the pass (``CYCLE_SCENE``: the fully
+    largest normal force in the contact's group of touching free blocks (``cycle_measure``
+    ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`), on its own blocks
+    (``CYCLE_BLOCKS``: :func:`_local_force`) or in the pass (``CYCLE_SCENE``: the fully
     implicit method's predictor, whose iterations judge every contact again); the lagged
     force's floor ``floor`` is the group's under the first two, the pass's under the third;
     the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
