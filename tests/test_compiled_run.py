@@ -191,9 +191,10 @@ def test_no_batch_where_the_run_needs_every_step(monkeypatch, tmp_path):
 def test_a_run_that_checkpoints_takes_batches_between_its_checkpoints(monkeypatch, tmp_path):
     """A batch stops before each step after which the run writes its checkpoint, and the run
     takes that step itself: the checkpoints come at the same steps, and hold the same
-    states, as step by step, and a run resumed from one ends as the run that went through
-    (on the 2-block incline of ``benchmarks/small_step.py``, 6,000 steps with a checkpoint
-    every 1,000: 134 us a step without batches, 31 with them, 28 without checkpoints)."""
+    states, as step by step, and half a run resumed from its checkpoint ends as one
+    simulation run for two halves (on the 2-block incline of ``benchmarks/small_step.py``,
+    6,000 steps with a checkpoint every 1,000: 134 us a step without batches, 31 with them,
+    28 without checkpoints)."""
     make = CASES["coulomb incline"]
     saved = {}
     save = dda.Simulation.save_checkpoint
