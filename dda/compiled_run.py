@@ -194,7 +194,8 @@ class StepRuns:
         sim.committed = replace(
             state, **moved, time=float(t), x=x, velocity=velocity, stress=stress, rotation=rotation,
             centroid=centroid, contacts=ContactSet(c.vertex, c.edge, c.bj, c.bk, c_state,
-                                                   rows[0], rows[1], rows[2], history),
+                                                   rows[0], rows[1], rows[2], history,
+                                                   rows[6].astype(np.int64)),
             last_move=float(last_move), untracked=float(untracked),
             penetration=float(penetration))
         self._stats(stats, norms, n_norms, steps, dt, wall, pattern.unknowns, args[0])

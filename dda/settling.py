@@ -378,10 +378,10 @@ def _static_steps(model: Model, steps_model: Model, state: StepState, dt0: float
     without, a block that has moved ``RELEASE_MOVE`` of its size from ``state`` ends the
     steps unsettled (it slides on)."""
     # (whatever the run's: module docstring) with the cycle rule measured over each contact's
-    # group of touching blocks whatever the run's: on the contacts' own blocks the cut slope's
-    # held steps did not settle in 400; the run's own steps judge the contacts that the
-    # settle held
-    solver = LegacyPullBack(cycle_local=False)
+    # group of touching blocks whatever the run's, and without the memory of held contacts:
+    # on the contacts' own blocks the cut slope's held steps did not settle in 400; the
+    # run's own steps judge the contacts that the settle held
+    solver = LegacyPullBack(cycle_local=False, cycle_memory=0)
     free = model.free
     start = state.x
     limit = MECHANISM_MOVE * model.size[model.topo.block]

@@ -348,7 +348,7 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
          rotation, centroid) = contact_step(*args)
     if status == FALLBACK:
         return None
-    xi0, t_n, t_s, g_se, slip, sliding_out = rows[:6]
+    xi0, t_n, t_s, g_se, slip, sliding_out, ago = rows
     (solver_status, oc_status, oc_passes, passes, iterations, solves, n_pairs, worst, gv, gk,
      on_edge) = counts.tolist()
     largest, worst_move, scale, deepest, spring, untracked, gdepth, gtol = numbers_out.tolist()
@@ -362,7 +362,7 @@ def _small_step(model, state, dt, solver, settings, d0, ints, k_eff, f_eff, v_ef
     if sliding:
         history["sliding"] = sliding_out
     sol = StepSolution(d, ContactSet(c.vertex, c.edge, c.bj, c.bk, trial_state, xi0, t_n, t_s,
-                                     history), True, passes,
+                                     history, ago.astype(np.int64)), True, passes,
                        iterations if newton else passes, "", norms.tolist() if newton else [])
     ended = _Ended(x_new, largest, worst, worst_move, velocity, stress, rotation, centroid)
     if status == MOVED or status == TOO_FAR:
@@ -443,10 +443,12 @@ def contact_step_arguments(model, state, dt, solver, settings, d0, ints, k_eff, 
             float(settings.max_displacement_ratio), joints.pair_keys, joints.pair_joint,
             joints.default, joints.normal_penalty, joints.shear_penalty, zeta, zeta_s,
             c.vertex, c.edge, c.bj, c.bk, c.state, c.xi0, c.t_n, c.t_s, history["g_se"],
-            history["slip"], np.zeros(m) if sliding is None else sliding, law, initial,
+            history["slip"], np.zeros(m) if sliding is None else sliding,
+            np.asarray(c.held_ago, dtype=np.int64), law, initial,
             k_eff, f_eff, known[2], *dense_layout(pattern), SPRING_TERMS, oc.GAP_ROUND_OFF,
             oc._COORDINATE_ROUND_OFF, settings.max_open_close, float(oc.SETTLE_BAND),
-            (*pass_rules(), oc.RETRY_PATIENCE, oc.LAG_SECANT_FROM, oc.cycle_measure(solver)),
+            (*pass_rules(), oc.RETRY_PATIENCE, oc.LAG_SECANT_FROM, oc.cycle_measure(solver),
+             oc.cycle_memory(solver)),
             bool(getattr(solver, "unsettled_predictor", False)),
             int(getattr(solver, "max_iter", 1)), newton_module.PREDICTOR_ITERATIONS,
             float(newton_module.PREDICTOR_CONTRACTION), float(getattr(solver, "tol", 1.0)),

@@ -102,7 +102,7 @@ def _everything(sim, result) -> dict:
               "untracked", "penetration"):
         out[f"state {k}"] = getattr(s, k)
     c = s.contacts
-    for k in ("vertex", "edge", "bj", "bk", "state", "xi0", "t_n", "t_s"):
+    for k in ("vertex", "edge", "bj", "bk", "state", "xi0", "t_n", "t_s", "held_ago"):
         out[f"contacts {k}"] = getattr(c, k)
     for k, v in c.history.items():
         out[f"history {k}"] = v

@@ -168,8 +168,10 @@ def test_carrying_the_same_contacts_over_keeps_everything():
 
     sim = dda.Simulation(scenes.shaken_cut_slope()[0], dt=2e-3)
     sim.run(0.02, progress=False)
-    old, x, topo = sim.state.contacts, sim.state.x, sim.model.topo
+    old, x, topo = sim.state.contacts.copy(), sim.state.x, sim.model.topo
     assert np.any(old.state == 0) and np.any(old.state != 0)
+    old.held_ago = np.arange(len(old)) % 5 + 1  # counts of the cycle rule's memory to carry
+    old.t_n[np.flatnonzero(old.state != 0)[::3]] = 0.0  # and contacts that ended it held
     same = CandidateContacts(old.vertex, old.edge, old.bj, old.bk)
     back = np.arange(len(old))[::-1]
     reverse = CandidateContacts(old.vertex[back], old.edge[back], old.bj[back], old.bk[back])
@@ -177,8 +179,9 @@ def test_carrying_the_same_contacts_over_keeps_everything():
     slow, fresh_slow, _ = carry_over(old, reverse, x, topo.nxt, topo.prv, sim.model.n_blocks)
     order = np.argsort(back)
     np.testing.assert_array_equal(fresh_fast, fresh_slow[order])
-    for name in ("vertex", "edge", "bj", "bk", "state", "xi0", "t_n", "t_s"):
+    for name in ("vertex", "edge", "bj", "bk", "state", "xi0", "t_n", "t_s", "held_ago"):
         np.testing.assert_array_equal(getattr(fast, name), getattr(slow, name)[order])
+    assert set(fast.held_ago) > {1}
     assert fast.history.keys() == slow.history.keys()
     for key in fast.history:
         np.testing.assert_array_equal(fast.history[key], slow.history[key][order])

@@ -24,14 +24,14 @@ def test_keywords_come_from_the_signature():
     assert set(registry.parameters(BartonBandis)) == {
         "jrc", "jcs", "phi_r", "mobilized", "slip_at_peak", "block_size", "dilation",
         "max_angle"}
-    assert registry.parameters(LegacyPullBack) == ("cycle_local",)
+    assert registry.parameters(LegacyPullBack) == ("cycle_local", "cycle_memory")
     assert registry.parameters(NewtonRaphson) == ("tol", "max_iter", "unsettled_predictor")
     law = registry.make_law("barton", jrc=10.0, jcs=50e6, phi_r=28.0, dilation=True)
     assert isinstance(law, BartonBandis) and law.dilation
     solver = registry.make_solver("newton", tol=1e-8)
     assert isinstance(solver, NewtonRaphson) and solver.tol == 1e-8
     with pytest.raises(TypeError, match=r"unknown keyword 'tol' for solver 'legacy' "
-                                        r"\(it takes: cycle_local\)"):
+                                        r"\(it takes: cycle_local, cycle_memory\)"):
         registry.make_solver("legacy", tol=1e-8)
 
 

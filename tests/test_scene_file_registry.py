@@ -236,7 +236,7 @@ def test_newton_settings_under_the_legacy_solver_are_named(tmp_path):
     text = SCENE.replace('solver = "legacy"', 'solver = "legacy"\ntol = 1e-8\nmax_iter = 9')
     with pytest.raises(SceneFileError, match=r"line 33, simulation: tol and max_iter are not "
                                              r"settings of solver = 'legacy' \(it takes: "
-                                             r"cycle_local\)"):
+                                             r"cycle_local, cycle_memory\)"):
         load_scene(write(tmp_path, text))
 
 

@@ -16,8 +16,10 @@ import numpy as np
 
 from dda.contact.detection import CandidateContacts
 from dda.contact.kinematics import ContactGeometry, contact_geometry
+from dda.kernels.open_close import HELD_NEVER, own_measures
 
-__all__ = ["OPEN", "STICK", "SLIP", "ContactSet", "carry_over", "pair_key"]
+__all__ = ["OPEN", "STICK", "SLIP", "HELD_NEVER", "ContactSet", "carry_over", "held_ago",
+           "pair_key"]
 
 OPEN, STICK, SLIP = 0, 1, 2
 STATE_NAMES = ("open", "stick", "slip")
@@ -44,6 +46,12 @@ class ContactSet:
     xi0 : edge parameter of the shear reference point x0' (METHOD.md section 3)
     t_n, t_s : committed normal (negative in compression) and shear force, N per m
     history : the friction laws' history fields, each an (m,) array
+    held_ago : (m,) int64, as of the start of the step that made this set: how many steps
+        before it the contact last ended a step closed at zero normal force (1: the step
+        just before; :data:`HELD_NEVER` for never, and for a contact found anew), which is
+        how a contact that OPEN-CLOSE's cycle rule held ends its step. Legacy DDA measures
+        the cycle rule's limit of a contact held within its last ``cycle_memory`` steps on
+        its own blocks (:mod:`dda.solvers.open_close`). None (the default): never held.
     """
 
     vertex: np.ndarray
@@ -55,6 +63,11 @@ class ContactSet:
     t_n: np.ndarray
     t_s: np.ndarray
     history: dict[str, np.ndarray]
+    held_ago: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.held_ago is None:
+            self.held_ago = np.full(len(self.vertex), HELD_NEVER, dtype=np.int64)
 
     def __len__(self):
         return len(self.vertex)
@@ -70,8 +83,17 @@ class ContactSet:
         return ContactSet(
             self.vertex.copy(), self.edge.copy(), self.bj.copy(), self.bk.copy(),
             self.state.copy(), self.xi0.copy(), self.t_n.copy(), self.t_s.copy(),
-            {k: v.copy() for k, v in self.history.items()},
+            {k: v.copy() for k, v in self.history.items()}, self.held_ago.copy(),
         )
+
+
+def held_ago(contacts: ContactSet) -> np.ndarray:
+    """(m,) each contact's ``held_ago`` for the step after ``contacts`` (a committed set):
+    1 where it ended its step closed at zero normal force (held by the cycle rule, or closed
+    at a gap of round-off), else one more than it had (up to :data:`HELD_NEVER`)."""
+    return own_measures(np.asarray(contacts.state, dtype=np.int8),
+                        np.asarray(contacts.t_n, dtype=np.float64),
+                        np.asarray(contacts.held_ago, dtype=np.int64), 0)[1]
 
 
 def _to_adjacent_edges(old, new, hit, src, xi0, x, nxt, prv, n_blocks, geom):
@@ -123,7 +145,8 @@ def _carried_whole(old, new, x, nxt):
         xi0[fresh] = geom.xi[fresh]
         t_n[fresh] = 0.0
         t_s[fresh] = 0.0
-    contacts = ContactSet(new.vertex, new.edge, new.bj, new.bk, state, xi0, t_n, t_s, history)
+    contacts = ContactSet(new.vertex, new.edge, new.bj, new.bk, state, xi0, t_n, t_s, history,
+                          held_ago(old))
     return contacts, fresh, geom
 
 
@@ -155,6 +178,7 @@ def carry_over(
     t_n = np.zeros(m)
     t_s = np.zeros(m)
     history = {k: np.zeros(m) for k in old.history}
+    ago = np.full(m, HELD_NEVER, dtype=np.int64)
     found_anew = np.ones(m, dtype=bool)
     geom = new.geometry
     if geom is None:
@@ -178,10 +202,12 @@ def carry_over(
         xi0[same] = old.xi0[src[same]]
         for k in history:
             history[k][carried] = old.history[k][from_old]
+        ago[carried] = held_ago(old)[from_old]
     fresh = state == OPEN
     # an open contact's shear reference follows the foot until it closes
     xi0[fresh] = geom.xi[fresh]
     t_n[fresh] = 0.0
     t_s[fresh] = 0.0
-    contacts = ContactSet(new.vertex, new.edge, new.bj, new.bk, state, xi0, t_n, t_s, history)
+    contacts = ContactSet(new.vertex, new.edge, new.bj, new.bk, state, xi0, t_n, t_s, history,
+                          ago)
     return (contacts, fresh, geom, found_anew) if with_new else (contacts, fresh, geom)

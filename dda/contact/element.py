@@ -510,7 +510,8 @@ class ContactElement:
         (written into ``history``, which the set takes over)."""
         self.laws.initial_history(history, state == OPEN)
         c = self.contacts
-        return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s, history)
+        return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s, history,
+                          c.held_ago)
 
     def pair_increments(self, d: np.ndarray) -> np.ndarray:
         """(m, 12) increments [d_j; d_k] of each contact's two blocks from (n_blocks, 6) d."""

@@ -140,6 +140,7 @@ def _state_to_data(state, store, origin=None) -> dict:
         store.put(f"state/history/{name}", value)
     for name in _CONTACT_ARRAYS:
         store.put(f"state/contacts/{name}", getattr(c, name))
+    store.put("state/contacts/held_ago", c.held_ago)
     for name in _STATE_ARRAYS:
         store.put(f"state/{name}", getattr(state, name))
     if len(state.bolt_broken):  # the bolts' ends and broken flags (a scene with bolts)
@@ -344,7 +345,7 @@ def _solver(data):
 
 
 def _state(data, store, model, initial):
-    from dda.contact.contacts import ContactSet
+    from dda.contact.contacts import HELD_NEVER, ContactSet
     from dda.step import StepState
 
     # a checkpoint written before models had an origin holds the scene's coordinates
@@ -402,8 +403,14 @@ def _state(data, store, model, initial):
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
             raise CheckpointError(f"state.{k}: not a number")
         numbers[k] = float(v)
+    ago = None  # (a checkpoint written before the cycle rule's memory: never held)
+    if "state/contacts/held_ago" in store.arrays:
+        ago = store.get({"array": "state/contacts/held_ago"}, "state.contacts.held_ago",
+                        dtype=np.int64, shape=(m,))
+        if m and (ago.min() < 1 or ago.max() > HELD_NEVER):
+            raise CheckpointError("state.contacts.held_ago: not a count of steps")
     contacts = ContactSet(c["vertex"], c["edge"], c["bj"], c["bk"], c["state"], c["xi0"],
-                          c["t_n"], c["t_s"], history)
+                          c["t_n"], c["t_s"], history, ago)
     if model.bolts is not None:
         n_bolts = len(model.bolts)
         arrays["bolt_points"] = store.get({"array": "state/bolt_points"}, "state.bolt_points",

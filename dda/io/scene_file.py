@@ -116,7 +116,7 @@ The format (every table may be left out but ``[simulation]`` with its ``dt``, so
     duration = 1.0
     solver = "newton"                     # or "legacy" (see below); tol, max_iter,
                                           # unsettled_predictor: newton's;
-                                          # cycle_local: legacy's
+                                          # cycle_local, cycle_memory: legacy's
     analysis = "dynamic"                  # also: velocity_carry, max_open_close,
                                           # record_every, max_displacement_ratio,
                                           # penetration_tolerance, locate_reversals

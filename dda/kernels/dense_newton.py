@@ -475,7 +475,8 @@ def newton_dense_step(max_passes, rtol, floor, cycle_tension, relax_after, patie
         calm_limit = retry_patience if settle_friction else patience
         oc_status, oc_passes, d, _, _, _, friction_settled = dense_passes(
             max_passes, settle_friction, 0.0, rtol, floor, cycle_tension, relax_after,
-            calm_limit, np.int64(0), np.bool_(True), np.int64(0),
+            calm_limit, np.int64(0), np.bool_(True), np.int64(0), np.zeros(m, dtype=np.bool_),
+            np.zeros(m),
             block_k, block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step,
             side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn,
             ps, kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion,

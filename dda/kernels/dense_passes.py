@@ -110,7 +110,8 @@ def single_switch(state, proposed, gap):
 
 @njit(cache=True)
 def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
-                 patience, secant_from, remember_open, cycle_measure, block_k, block_f, d_known,
+                 patience, secant_from, remember_open, cycle_measure, own_measure, shear, block_k,
+                 block_f, d_known,
                  n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
                  side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps,
                  kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion,
@@ -121,10 +122,11 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
     ----------
     max_passes : passes allowed
     settle_friction, band, rtol, floor, cycle_tension, relax_after, patience, secant_from,
-    remember_open, cycle_measure :
+    remember_open, cycle_measure, own_measure, shear :
         the iteration's rules (:func:`dda.kernels.open_close.pass_judge`; ``secant_from`` 0,
         ``remember_open`` True and ``cycle_measure`` ``CYCLE_SCENE`` for the fully implicit
-        method's predictor, legacy DDA's ``LAG_SECANT_FROM``, False and its own measure)
+        method's predictor, legacy DDA's ``LAG_SECANT_FROM``, False and its own measure, with
+        the contacts it measures on their own blocks and the committed shear forces)
     block_k, block_f, d_known : the step's block matrices, forces and known increments
     n, block_base, block_step, free_blocks, pair_base, pair_step, side_row, side_block :
         the dense layout of :class:`dda.solvers.linear.SystemPattern`
@@ -201,7 +203,7 @@ def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, 
             state, held, judged, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
             calm, gap_tol, kn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding, bj,
             bk, free, settle_friction, band, passes, rtol, floor, cycle_tension, relax_after,
-            patience, secant_from, remember_open, cycle_measure)
+            patience, secant_from, remember_open, cycle_measure, own_measure, shear)
         if done:
             return CONVERGED, passes, d, new_state, gap.copy(), dgs.copy(), friction_settled
         changed = False
@@ -245,7 +247,9 @@ def first_states(state0, over, gap0, gap_tol, explicit):
 
 @njit(cache=True)
 def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, patience,
-                      secant_from, cycle_measure, block_k, block_f, d_known, n, block_base,
+                      secant_from, cycle_measure, own_measure, shear, block_k, block_f,
+                      d_known, n,
+                      block_base,
                       block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
                       reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length,
                       has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,
@@ -276,7 +280,7 @@ def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after,
     state, held = first_states(state0, over, gap0, gap_tol, np.bool_(True))
     status, passes, d, state, gap, dgs, _ = dense_passes(
         max_passes, np.bool_(True), band, rtol, floor, cycle_tension, relax_after, np.int64(0),
-        secant_from, np.bool_(False), cycle_measure,
+        secant_from, np.bool_(False), cycle_measure, own_measure, shear,
         block_k,
         block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
         side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn,

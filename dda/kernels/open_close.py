@@ -46,6 +46,8 @@ REMEMBER_FROM_FLIPS = 4
 #: blocks, or the largest in the contact's group of free blocks that touch
 #: (:func:`dda.solvers.open_close.cycle_measure`)
 CYCLE_SCENE, CYCLE_BLOCKS, CYCLE_GROUP = 0, 1, 2
+#: (:data:`dda.contact.contacts.HELD_NEVER`)
+HELD_NEVER = 2**31 - 1
 
 
 def kernel_history(history, m):
@@ -349,7 +351,8 @@ def pass_loads(state, kind, mu_s, mu_d, cohesion, face, g_se, sliding, dgs_prev,
 def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips, pinned,
                calm, gap_tol, pn, ps, length, kind, mu_s, mu_d, cohesion, face, g_se, sliding,
                bj, bk, free, settle_friction, band, passes, rtol, floor, cycle_tension,
-               relax_after, patience, secant_from, remember_open, cycle_measure):
+               relax_after, patience, secant_from, remember_open, cycle_measure, own_measure,
+               shear):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
     Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
@@ -363,8 +366,14 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     largest normal force in the contact's group of touching free blocks (``cycle_measure``
     ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`), on its own blocks
     (``CYCLE_BLOCKS``: :func:`_local_force`) or in the pass (``CYCLE_SCENE``: the fully
-    implicit method's predictor, whose iterations judge every contact again); the lagged
-    force's floor ``floor`` is the group's under the first two, the pass's under the third;
+    implicit method's predictor, whose iterations judge every contact again); under
+    ``CYCLE_GROUP`` a contact whose ``own_measure`` (m,) is True is measured on its own
+    blocks (a contact held at the end of one of its last steps: :func:`own_measures`), each
+    contact's force there ``hypot(t_n, shear)`` with ``shear`` (m,) the contacts' committed
+    shear forces (a cohesive contact carries its block in shear at no normal force; under
+    ``CYCLE_BLOCKS`` the normal forces alone); the
+    lagged force's floor ``floor`` is the group's under the first two, the pass's under the
+    third;
     the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
     never), whatever the friction and lagged forces
     (:func:`dda.solvers.open_close.predictor_patience`).
@@ -404,8 +413,15 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
     if cycle_measure != CYCLE_SCENE:
         group = _group_force(t_n, state, bj, bk, free, 1.0)
         if cycling:
-            local = (cycle_tension * group if cycle_measure == CYCLE_GROUP
-                     else _local_force(t_n, bj, bk, free, cycle_tension))
+            if cycle_measure == CYCLE_GROUP:
+                local = cycle_tension * group
+                if own_measure.any():
+                    own = _local_force(np.hypot(t_n, shear), bj, bk, free, cycle_tension)
+                    for i in range(m):
+                        if own_measure[i]:
+                            local[i] = own[i]
+            else:
+                local = _local_force(t_n, bj, bk, free, cycle_tension)
     lag_ok = np.empty(m, dtype=np.bool_)
     for i in range(m):
         lag_ok[i] = abs(t_n[i] - t_n_lag[i]) <= rtol * _np_max(
@@ -510,9 +526,29 @@ def _lag_all(lag_ok, state):
 
 
 @njit(cache=True)
+def own_measures(state, t_n, held_ago, memory):
+    """(m,) the contacts whose cycle limit legacy DDA measures on their own blocks under
+    ``CYCLE_GROUP``: those held at the end of one of their last ``memory`` steps, as the
+    committed ``state``, normal forces ``t_n`` and step counts ``held_ago`` (of the step
+    that committed them: :attr:`dda.contact.ContactSet.held_ago`) say, and the counts
+    carried to the next step (:func:`dda.contact.contacts.held_ago`): returns
+    ``(own, ago)``."""
+    m = state.shape[0]
+    own = np.zeros(m, dtype=np.bool_)
+    ago = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        if state[i] != _OPEN and t_n[i] == 0.0:
+            ago[i] = 1
+        else:
+            ago[i] = _np_min(held_ago[i], HELD_NEVER - 1) + 1
+        own[i] = ago[i] <= memory
+    return own, ago
+
+
+@njit(cache=True)
 def _local_force(t_n, bj, bk, free, band):
-    """``band`` times the largest normal force on either block of each contact, the smaller
-    of the two (a block whose motion is known does not count)."""
+    """``band`` times the largest normal force (or other force ``t_n``) on either block of
+    each contact, the smaller of the two (a block whose motion is known does not count)."""
     largest = np.zeros(free.shape[0])
     for i in range(t_n.shape[0]):
         largest[bj[i]] = _np_max(largest[bj[i]], abs(t_n[i]))

@@ -67,15 +67,15 @@ def run_steps(max_steps, velocity, s_centroid, last_move, untracked, time,
               penetration, min_size, tolerance, min_thickness, max_ratio, pair_keys,
               pair_joint, default, pn_table, ps_table, zeta_table, zeta_s_table, c_vertex,
               c_edge, c_bj, c_bk, c_state, c_xi0, c_t_n, c_t_s, c_g_se, c_slip, c_sliding,
-              law, init, block_k, block_f, d_known, n, block_base, block_step, free_blocks,
-              pair_base, pair_step, side_row, side_block, keep, reduced, terms, gap_rel,
-              gap_abs, max_passes, band, rules, unsettled, max_iter, predictor_iterations,
-              predictor_contraction, tol, round_off, halvings, cycle_length, reversed_stick,
-              hold_tension, hold_after, rigid, faces, face_cos, noise_floor):
+              c_held_ago, law, init, block_k, block_f, d_known, n, block_base, block_step,
+              free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, terms,
+              gap_rel, gap_abs, max_passes, band, rules, unsettled, max_iter,
+              predictor_iterations, predictor_contraction, tol, round_off, halvings, cycle_length,
+              reversed_stick, hold_tension, hold_after, rigid, faces, face_cos, noise_floor):
     """Up to ``max_steps`` steps of ``dt`` from the committed state (module docstring).
 
     The arguments from ``newton`` on are :func:`contact_step`'s for the first step (those
-    of the state, ``x`` to ``penetration``, ``c_state`` to ``c_sliding``, ``block_k`` and
+    of the state, ``x`` to ``penetration``, ``c_state`` to ``c_held_ago``, ``block_k`` and
     ``block_f``, are made again for every step here); before them:
 
     max_steps : the steps to take at most: each a whole step of ``dt`` and none the run's
@@ -140,13 +140,14 @@ def run_steps(max_steps, velocity, s_centroid, last_move, untracked, time,
     cur_rot = rotation.copy()
     cur_centroid = s_centroid.copy()
     cur_state = c_state.copy()
-    rows = np.empty((6, m))
+    rows = np.empty((7, m))
     rows[0, :] = c_xi0
     rows[1, :] = c_t_n
     rows[2, :] = c_t_s
     rows[3, :] = c_g_se
     rows[4, :] = c_slip
     rows[5, :] = c_sliding
+    rows[6, :] = c_held_ago
     cur_pen = penetration
     no_sliding = np.zeros(m)
     steps = 0
@@ -171,7 +172,8 @@ def run_steps(max_steps, velocity, s_centroid, last_move, untracked, time,
             cur_pen, min_size, tolerance, min_thickness, max_ratio, pair_keys, pair_joint,
             default, pn_table, ps_table, zeta_table, zeta_s_table, c_vertex, c_edge, c_bj,
             c_bk, cur_state, rows[0].copy(), rows[1].copy(), rows[2].copy(), rows[3].copy(),
-            rows[4].copy(), sliding_in, law, init, k_eff, f_eff, step_known, n, block_base,
+            rows[4].copy(), sliding_in, rows[6].astype(np.int64), law, init, k_eff, f_eff,
+            step_known, n, block_base,
             block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
             reduced, terms, gap_rel, gap_abs, max_passes, band, rules, unsettled, max_iter,
             predictor_iterations, predictor_contraction, tol, round_off, halvings,

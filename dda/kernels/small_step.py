@@ -46,6 +46,7 @@ from dda.kernels.dense_passes import legacy_dense_step
 from dda.kernels.element import element_arrays
 from dda.kernels.faces import face_index
 from dda.kernels.joints import deepest_spring, joint_rows
+from dda.kernels.open_close import CYCLE_GROUP, own_measures
 
 __all__ = ["contact_step", "OK", "FALLBACK", "NOT_SOLVED", "MOVED", "TOO_FAR", "UNTRACKED"]
 
@@ -58,21 +59,24 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
                  penetration, min_size, tolerance, min_thickness, max_ratio, pair_keys,
                  pair_joint, default, pn_table, ps_table, zeta_table, zeta_s_table, c_vertex,
                  c_edge, c_bj, c_bk, c_state, c_xi0, c_t_n, c_t_s, c_g_se, c_slip, c_sliding,
-                 law, init, block_k, block_f, d_known, n, block_base, block_step, free_blocks,
-                 pair_base, pair_step, side_row, side_block, keep, reduced, terms, gap_rel,
-                 gap_abs, max_passes, band, rules, unsettled, max_iter, predictor_iterations,
-                 predictor_contraction, tol, round_off, halvings, cycle_length, reversed_stick,
-                 hold_tension, hold_after, rigid, faces, face_cos, noise_floor):
+                 c_held_ago, law, init, block_k, block_f, d_known, n, block_base, block_step,
+                 free_blocks, pair_base, pair_step, side_row, side_block, keep, reduced, terms,
+                 gap_rel, gap_abs, max_passes, band, rules, unsettled, max_iter,
+                 predictor_iterations, predictor_contraction, tol, round_off, halvings,
+                 cycle_length, reversed_stick, hold_tension, hold_after, rigid, faces, face_cos,
+                 noise_floor):
     """One step's contacts, solve, moves and guard (module docstring).
 
     ``law`` is ``(kind, mu_static, mu_dynamic, cohesion)`` of the scene's one law, ``init``
     its initial ``(g_se, slip, sliding)``, ``faces`` whether it judges faces (grouped with
     :func:`dda.kernels.faces.face_index` and ``face_cos``); ``rules`` the passes' ``(rtol, floor,
-    cycle_tension, relax_after, patience, retry_patience, secant_from, cycle_measure)`` (the fully
-    implicit method's patience of its predictor and of its retry, :func:`dda.solvers.open_close.
-    predictor_patience`, and legacy DDA's secant lag, ``LAG_SECANT_FROM``, and cycle limit's
-    measure, :func:`dda.solvers.open_close.cycle_measure`); the rest are the arguments of the
-    kernels named in the module docstring, under their names there.
+    cycle_tension, relax_after, patience, retry_patience, secant_from, cycle_measure,
+    cycle_memory)`` (the fully implicit method's patience of its predictor and of its retry,
+    :func:`dda.solvers.open_close.predictor_patience`, and legacy DDA's secant lag,
+    ``LAG_SECANT_FROM``, and cycle limit's measure and memory,
+    :func:`dda.solvers.open_close.cycle_measure` and ``cycle_memory``); ``c_held_ago`` the
+    committed contacts' :attr:`dda.contact.ContactSet.held_ago`; the rest are the arguments of
+    the kernels named in the module docstring, under their names there.
 
     Returns
     -------
@@ -85,7 +89,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         deepest, spring and untracked depths, its depth and tolerance)
     d, norms : the increments, Newton's residual norms
     state : the trial contacts' states
-    rows : (6, m) the trial contacts' ``xi0, t_n, t_s, g_se, slip, sliding``
+    rows : (7, m) the trial contacts' ``xi0, t_n, t_s, g_se, slip, sliding, held_ago``
         (:func:`_contact_rows`)
     x_new, velocity, new_stress, new_rotation, new_centroid : the blocks at the step's end
     """
@@ -191,7 +195,9 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         face = np.full(m, -1, dtype=np.int64)
     # ---- the solver's step (dda.solvers.legacy._dense_step, dda.solvers.newton._dense_step)
     (rtol, floor, cycle_tension, relax_after, patience, retry_patience, secant_from,
-     cycle_measure) = rules
+     cycle_measure, cycle_memory) = rules
+    own, ago = own_measures(c_state, c_t_n, c_held_ago,
+                            cycle_memory if cycle_measure == CYCLE_GROUP else np.int64(0))
     norms = e0
     if newton:
         (oc_status, oc_passes, passes, status, it, d, norms, scale, closed, slipping, t_n, t_s,
@@ -219,7 +225,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         (status, passes, d, state, t_n, t_s, g_se_out, slip_out,
          sliding_out) = legacy_dense_step(max_passes, band, rtol, floor, cycle_tension,
                                           relax_after, np.int64(0), secant_from, cycle_measure,
-                                          block_k, block_f, d_known, n,
+                                          own, np.abs(t_s0), block_k, block_f, d_known, n,
                                           block_base, block_step, free_blocks, pair_base,
                                           pair_step, side_row, side_block, keep, reduced, rows,
                                           terms, bj, bk, free, e_row, i_row, gap, pn, ps_step,
@@ -230,7 +236,7 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         solved = status == 0
     if not solved:
         return (NOT_SOLVED, ints, floats, d, norms, state,
-                _contact_rows(xi0, t_n, t_s, g_se_out, slip_out, sliding_out),
+                _contact_rows(xi0, t_n, t_s, g_se_out, slip_out, sliding_out, ago),
                 e1, np.zeros((nb, 6)), np.zeros((nb, 3)), np.zeros(nb), e1)
     if has_shear:  # dda.contact.dashpot.shear_dashpot_end
         for c in range(m):
@@ -260,21 +266,23 @@ def contact_step(newton, x, offsets, nxt, prv, block, free, thickness, size, den
         if untracked > 1.0:
             result = UNTRACKED
     return (result, ints, floats, d, norms, state,
-            _contact_rows(xi0, t_n, t_s, g_se_out, slip_out, sliding_out),
+            _contact_rows(xi0, t_n, t_s, g_se_out, slip_out, sliding_out, ago),
             x_new, velocity, new_stress, new_rotation, new_centroid)
 
 
 @njit(cache=True)
-def _contact_rows(xi0, t_n, t_s, g_se, slip, sliding):
-    """(6, m) the trial contacts' ``xi0, t_n, t_s, g_se, slip, sliding`` as rows: one array to
-    hand back, where six cost six conversions to numpy arrays (half a us each)."""
-    rows = np.empty((6, xi0.shape[0]))
+def _contact_rows(xi0, t_n, t_s, g_se, slip, sliding, held_ago):
+    """(7, m) the trial contacts' ``xi0, t_n, t_s, g_se, slip, sliding, held_ago`` as rows: one
+    array to hand back, where seven cost seven conversions to numpy arrays (half a us
+    each)."""
+    rows = np.empty((7, xi0.shape[0]))
     rows[0, :] = xi0
     rows[1, :] = t_n
     rows[2, :] = t_s
     rows[3, :] = g_se
     rows[4, :] = slip
     rows[5, :] = sliding
+    rows[6, :] = held_ago
     return rows
 
 
@@ -284,5 +292,5 @@ def _nothing(nb):
     e0 = np.zeros(0)
     e1 = np.zeros((0, 2))
     return (np.zeros(11, dtype=np.int64), np.zeros(8), np.zeros((nb, 6)), e0,
-            np.zeros(0, dtype=np.int8), np.zeros((6, 0)), e1, np.zeros((nb, 6)),
+            np.zeros(0, dtype=np.int8), np.zeros((7, 0)), e1, np.zeros((nb, 6)),
             np.zeros((nb, 3)), np.zeros(nb), e1)

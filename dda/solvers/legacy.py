@@ -20,11 +20,13 @@ from dda.solvers import open_close as oc_rules
 from dda.solvers.base import NonlinearSolver, StepProblem, StepSolution
 from dda.solvers.open_close import (
     cycle_measure,
+    cycle_memory,
     dense_arguments,
     dense_eligible,
     dense_failure,
     local_cycle_limit,
     open_close,
+    own_cycle_measures,
     pass_rules,
     round_off_gap,
 )
@@ -44,17 +46,24 @@ class LegacyPullBack(NonlinearSolver):
     Parameters
     ----------
     cycle_local : bool or None
-        Measure OPEN-CLOSE's cycle rule on a contact's own blocks: a contact that cycles
+        Measure OPEN-CLOSE's cycle rule on every contact's own blocks: a contact that cycles
         between open and closed is held closed while it pulls by at most ``CYCLE_TENSION``
         of the largest normal force on either of its blocks (the smaller), as the fully
-        implicit method's iterations do, instead of the largest in its group of free blocks
-        that touch each other through closed contacts (False; where all touch, the scene's
-        largest). Both are right where a heavy block far away would hold a light block's
-        contact; only the own blocks' is right for a light block on a heavy one it touches
-        (on a heavy free incline 30.9 mm in 0.3 s against the group's 5.0; Newton 31.1), but
-        it costs 2 to 10 times the steps on the shaken cut slope, most with cohesive joints
+        implicit method's iterations do (they take the shear forces too), instead of the
+        largest
+        normal force in its group of free blocks that touch each other through closed
+        contacts (False; where all touch, the scene's largest) for the contacts that the
+        memory below does not measure on their own blocks. On the shaken cut slope it costs
+        2 to 3 times the steps of the default, most with cohesive joints
         (:mod:`dda.solvers.open_close` has the numbers). None (the default):
         :data:`dda.solvers.open_close.CYCLE_LOCAL` (False), read at each step.
+    cycle_memory : int or None
+        Under the group's measure, the steps for which a contact that ended a step held by
+        the cycle rule is measured on its own blocks all the same: a hold that comes back
+        step after step is what hangs a light block on a heavy one it touches (on a heavy
+        free incline the block moves 30.4 mm in 0.3 s with the default 8, 5.0 mm with 0;
+        Newton 31.1), a hold that does not is a pass's noise. 0: never. None (the
+        default): :data:`dda.solvers.open_close.CYCLE_MEMORY` (8), read at each step.
 
     Examples
     --------
@@ -63,6 +72,8 @@ class LegacyPullBack(NonlinearSolver):
     LegacyPullBack()
     >>> LegacyPullBack(cycle_local=True)
     LegacyPullBack(cycle_local=True)
+    >>> LegacyPullBack(cycle_memory=0)
+    LegacyPullBack(cycle_memory=0)
     """
 
     name = "legacy"
@@ -75,22 +86,36 @@ class LegacyPullBack(NonlinearSolver):
     auto_kappa = 3.0
     # (a subclass's own __init__ need not set it)
     cycle_local = None
+    cycle_memory = None
 
-    def __init__(self, cycle_local: bool | None = None):
+    def __init__(self, cycle_local: bool | None = None, cycle_memory: int | None = None):
         if cycle_local is not None and not isinstance(cycle_local, bool | np.bool_):
             raise TypeError("LegacyPullBack: cycle_local must be True, False or None, got "
                             f"{cycle_local!r}")
+        if cycle_memory is not None and (isinstance(cycle_memory, bool | np.bool_)
+                                         or not isinstance(cycle_memory, int | np.integer)):
+            raise TypeError("LegacyPullBack: cycle_memory must be a whole number of steps or "
+                            f"None, got {cycle_memory!r}")
+        if cycle_memory is not None and cycle_memory < 0:
+            raise ValueError(f"LegacyPullBack: cycle_memory must be 0 or more steps, got "
+                             f"{cycle_memory}")
         self.cycle_local = None if cycle_local is None else bool(cycle_local)
+        self.cycle_memory = None if cycle_memory is None else int(cycle_memory)
 
     def __repr__(self):
-        extra = "" if self.cycle_local is None else f"cycle_local={self.cycle_local}"
-        return f"LegacyPullBack({extra})"
+        extra = []
+        if self.cycle_local is not None:
+            extra.append(f"cycle_local={self.cycle_local}")
+        if self.cycle_memory is not None:
+            extra.append(f"cycle_memory={self.cycle_memory}")
+        return f"LegacyPullBack({', '.join(extra)})"
 
     def solve_step(self, problem: StepProblem) -> StepSolution:
         el = problem.element
         if LEGACY_DENSE_STEP and dense_eligible(problem):
-            return _dense_step(problem, cycle_measure(self))
-        oc = open_close(problem, explicit=True, cycle_local=local_cycle_limit(self))
+            return _dense_step(problem, cycle_measure(self), cycle_memory(self))
+        oc = open_close(problem, explicit=True, cycle_local=local_cycle_limit(self),
+                        cycle_memory=cycle_memory(self))
         if not oc.converged:
             return StepSolution(None, None, False, oc.passes, oc.passes, oc.reason)
         if len(el) == 0:
@@ -122,10 +147,10 @@ def _compiled_trial(el, state, gap, dgs, history) -> ContactSet:
     c = el.contacts
     return ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(),
                       el.spring_force(state != OPEN, gap, t_n), t_s,
-                      kernel_history_dict(history, g_se, slip, sliding))
+                      kernel_history_dict(history, g_se, slip, sliding), c.held_ago)
 
 
-def _dense_step(problem: StepProblem, measure: int) -> StepSolution:
+def _dense_step(problem: StepProblem, measure: int, memory: int) -> StepSolution:
     """:meth:`LegacyPullBack.solve_step` on a dense system with the built-in laws: the
     pull-back, every OPEN-CLOSE pass and the step's end in one kernel call (the same
     decisions and numbers as the passes' kernel between the start's and the end's). Its time
@@ -136,11 +161,12 @@ def _dense_step(problem: StepProblem, measure: int) -> StepSolution:
         status, passes, d, state, t_n, t_s, g_se, slip, sliding = legacy_dense_step(
             problem.max_open_close, float(oc_rules.SETTLE_BAND), *pass_rules(),
             oc_rules.LAG_SECANT_FROM, int(measure),
+            own_cycle_measures(c, measure, memory), as_float64(np.abs(c.t_s)),
             *dense_arguments(problem), np.asarray(c.state, dtype=np.int8),
             *kernel_history(c.history, len(el)), as_float64(c.t_n), round_off_gap(el))
     count_solve(passes)
     if status != CONVERGED:
         return StepSolution(None, None, False, passes, passes, dense_failure(status, passes))
     trial = ContactSet(c.vertex, c.edge, c.bj, c.bk, state, c.xi0.copy(), t_n, t_s,
-                       kernel_history_dict(c.history, g_se, slip, sliding))
+                       kernel_history_dict(c.history, g_se, slip, sliding), c.held_ago)
     return StepSolution(d, trial, True, passes, passes)

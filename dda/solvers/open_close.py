@@ -87,30 +87,60 @@ that touches only fixed ones is measured on its own forces. The lagged normal fo
 incline's block as it is alone, to 1e-14 of its motion. On the shaken cut slope of
 ``examples/jointed_slope.py`` the 0.3 s took 910 steps and 41 cuts instead of 990 and 47.
 
-What the group does not mend: a light block on a heavy one that it touches. With the incline
-itself a free block of 41 t a metre on a fixed floor, the group's largest normal force is the
-incline's on its floor, 40 times the block's, and the block moves 5.0 mm in 0.3 s where the
-fully implicit method moves it 31.1 mm (a strict expected failure in
-``tests/test_open_close_cycles.py``). With ``CYCLE_LOCAL`` (or
-``LegacyPullBack(cycle_local=True)`` for one solver) legacy DDA measures the limit on the
-contact's own blocks (the smaller of their largest normal forces), as the fully implicit
-method's iterations do (:data:`dda.solvers.newton.HOLD_CYCLING`), and the floor still over the
-group: 30.9 mm there, and the far block's 87.2 mm to 1e-11. It stays off by default for what
-it does elsewhere (2026-12-07, ``benchmarks/README.md``, "Legacy DDA's cycle rule on a
-contact's own blocks, measured again"): on the shaken cut slope the contacts that cycle pull a
-median 14% of the largest normal force on their own blocks and 0.01% of the scene's, so the
-group's limit holds nearly all of them and the own blocks' 9%. The example's 0.3 s at its 5e10
-N/m and 2e-3 s then takes 1,891 steps and 53 cuts (43 s of CPU against 24), at ``--dt auto``
-2,310 and 41 against 2,078 and 10 (over 10 s on two cuts of the rock mass 1.12% of the steps
-cut against 0.03-0.07%), its 10 s 8,848 and 235 against 6,381 and 124, for a face that moves
-1-8% further and no nearer Newton's. With 1 MPa of cohesion (each cohesive contact
-near zero normal force has no consistent state: its strength ``c l`` is there while closed
-and gone once open) it takes 17,730 steps and 651 cuts against 1,712 and 88, and one face
-block ends 16.4 mm away where Newton and the group's measure leave it at 1.2 and 0.9 mm.
-``dda.settling``'s static steps keep the group's measure (on the own blocks the cut slope's
-held static steps did not settle in 400). The fully
-implicit method's predictor keeps the scene's measure either way: its iterations judge every
-contact again.
+What the group alone does not mend: a light block on a heavy one that it touches. With the
+incline itself a free block of 41 t a metre on a fixed floor, the group's largest normal force
+is the incline's on its floor, 40 times the block's, and the block, its cohesive contact held
+closed pulling up to 1% of that step after step, moves 5.0 mm in 0.3 s where the fully
+implicit method moves it 31.05 mm (``tests/test_open_close_cycles.py``). A hold that comes
+back step after step is such a block's glue; one that does not is a pass's noise. So a
+contact held at the end of one of its last ``CYCLE_MEMORY`` (8) steps (its
+:attr:`dda.contact.ContactSet.held_ago`: it ended the step closed at zero normal force) is
+measured on its own blocks, as the fully implicit method's iterations measure every contact
+(:data:`dda.solvers.newton.HOLD_CYCLING`): against the largest contact force ``hypot(t_n,
+t_s)`` on either block, the smaller, with the committed shear force ``t_s`` (a cohesive
+contact carries its block in shear at no normal force; measured on the normal forces alone,
+the example's slope at 1 MPa of cohesion below ended one face block 13.3 mm away where Newton
+leaves it at 1.2 mm). The block then moves 30.44 mm (2,121 steps and 47 cuts; Newton 2,348 and
+16), and 87.16 mm beside the far block as alone. Measured 2026-12-08 on legacy DDA's 0.3 s of
+``examples/jointed_slope.py`` (steps, cuts, CPU; the face blocks' median / most motion in
+mm; Newton's from ``dda.solvers.newton``'s docstring), the memory against the group alone
+(``cycle_memory=0``, the default before):
+
+=====================  ====================  =======================  ===================
+run                    memory (default)      group alone              Newton
+=====================  ====================  =======================  ===================
+5e10 N/m, dt 2e-3 s    1,064, 51, 28 s;      910, 41, 21 s;           710, 32;
+                       22.18 / 27.70         21.86 / 27.27            21.90 / 26.03
+``--auto``             1,282, 2, 23 s        1,274, 0                 698, 0
+``--dt auto``          2,078, 12, 36 s       2,078, 10                --
+10 kPa cohesion        3,800, 147, 60 s;     1,216, 51, 25 s;         9,166, 303;
+                       10.72 / 12.62         9.56 / 10.62             11.29 / 13.18
+1 MPa cohesion         5,438, 169, 68 s;     1,712, 88, 25 s;         13,592, 495;
+                       0.49 / 1.29           0.39 / 0.89              0.47 / 1.20
+=====================  ====================  =======================  ===================
+
+(1 MPa with gravity 1e-6 larger and smaller: 4,696 and 4,294 steps, the face 0.49 / 1.12 and
+0.47 / 1.06 mm.) At the example's stiff settings the memory costs 1.2 times the steps, and 3
+times with cohesive joints, whose faces it brings to within 7% of Newton's from 19-26% below
+it; at the settings the simulation would choose it costs nothing. The memory's length, on
+the normal forces alone (single runs, chaotic at a few percent): 1 step moved the incline's
+block 27.1 mm, 4 steps 30.0, 8 30.5, 16 30.4, every step since the contact was first held 30.7;
+the example at 10 kPa took 2,282, 3,025, 3,708, 4,162 and 10,239 steps.
+
+With ``CYCLE_LOCAL`` (or ``LegacyPullBack(cycle_local=True)`` for one solver) every contact is
+measured on its own blocks, on their largest normal forces alone: 30.88 mm on the heavy incline
+(2,353 steps, 16 cuts), the far block's 87.2 mm to 1e-11, but on the example's slope 1,891
+steps and 53 cuts (43 s of CPU against the group's 24) with the face at 22.91 / 29.42 mm,
+11,395 steps and 420 cuts at 10 kPa, and 17,730 and 651 at 1 MPa, where one face block ends
+16.4 mm away (2026-12-07, ``benchmarks/README.md``, "Legacy DDA's cycle rule on a contact's
+own blocks, measured again"): on the shaken cut slope the contacts that cycle pull a median
+14% of the largest normal force on their own blocks and 0.01% of the scene's, so the group's
+limit holds nearly all of them and the own blocks' 9%. Measured with the shear forces too, as
+the memory measures, it ended a face block 135 mm away at 1 MPa (17,129 steps, one run), and
+took 2,487 steps and 67 cuts on the example: it stays on the normal forces.
+``dda.settling``'s static steps keep the group's measure without the memory (on the own
+blocks the cut slope's held static steps did not settle in 400). The fully implicit method's
+predictor keeps the scene's measure either way: its iterations judge every contact again.
 
 From pass ``LAG_RELAX_AFTER`` on, a lagged normal force that oscillates (its error changed sign
 since the last pass) is under-relaxed, ``N_lag <- (N_lag + N) / 2``: where a sliding contact's
@@ -213,10 +243,11 @@ from dda.solvers.base import StepProblem
 from dda.solvers.linear import DENSE_LIMIT, SingularSystemError, assemble_and_solve
 
 __all__ = ["OpenCloseResult", "open_close", "NORMAL_FORCE_RTOL", "NORMAL_FORCE_FLOOR",
-           "GAP_ROUND_OFF", "CYCLE_TENSION", "CYCLE_LOCAL", "CYCLE_GROUP", "LAG_RELAX_AFTER",
+           "GAP_ROUND_OFF", "CYCLE_TENSION", "CYCLE_LOCAL", "CYCLE_GROUP", "CYCLE_MEMORY",
+           "LAG_RELAX_AFTER",
            "LAG_SECANT_FROM", "LAG_PATIENCE", "RETRY_PATIENCE", "SETTLE_BAND",
            "predictor_patience", "round_off_gap", "next_lag", "local_cycle_limit",
-           "cycle_measure"]
+           "cycle_measure", "cycle_memory", "own_cycle_measures"]
 
 # relative change of a sliding contact's normal force between passes that ends OPEN-CLOSE
 NORMAL_FORCE_RTOL = 0.01
@@ -238,6 +269,10 @@ CYCLE_LOCAL = False
 # away that touches only fixed ones is a group of its own); False: over the whole pass (the
 # lagged force's floor is the group's with CYCLE_LOCAL whatever this says)
 CYCLE_GROUP = True
+# legacy DDA, over the group: the steps for which a contact held at a step's end is measured
+# on its own blocks (a hold that repeats is a light block's glue; one that does not is a
+# pass's noise; 0: never)
+CYCLE_MEMORY = 8
 # the pass from which a sliding contact's lagged normal force is under-relaxed
 LAG_RELAX_AFTER = 6
 # legacy DDA: the pass from which an oscillating lagged normal force takes the secant step
@@ -284,7 +319,8 @@ class OpenCloseResult:
 def open_close(problem: StepProblem, explicit: bool,
                settle_friction: bool | None = None,
                band: float | None = None,
-               cycle_local: bool | None = None) -> OpenCloseResult:
+               cycle_local: bool | None = None,
+               cycle_memory: int | None = None) -> OpenCloseResult:
     """Run the OPEN-CLOSE iteration of one step (see the module docstring).
 
     ``settle_friction`` (default: ``explicit``) asks for the stick and slip states to settle
@@ -295,7 +331,9 @@ def open_close(problem: StepProblem, explicit: bool,
     ``CYCLE_LOCAL`` for legacy DDA, False for the predictor) measures the cycle rule's
     limit on each contact's own blocks (and the lagged force's floor over its group of
     touching free blocks); without it legacy DDA measures both over the group
-    (``CYCLE_GROUP``) and the predictor over the pass.
+    (``CYCLE_GROUP``), but the limit of a contact held at the end of one of its last
+    ``cycle_memory`` steps (default ``CYCLE_MEMORY``; 0: none) on its own blocks, and the
+    predictor over the pass.
     """
     if settle_friction is None:
         settle_friction = explicit
@@ -306,6 +344,7 @@ def open_close(problem: StepProblem, explicit: bool,
     el = problem.element
     if len(el) == 0:  # no contacts: one linear solve settles the step
         return _without_contacts(problem)
+    own = own_cycle_measures(el.contacts, measure, cycle_memory)
     gap_tol = round_off_gap(el)
     compiled = el.kernel_laws is not None
     history, t_stick, state, held = _start(el, explicit, gap_tol, compiled)
@@ -314,7 +353,7 @@ def open_close(problem: StepProblem, explicit: bool,
     if compiled:
         return _compiled_passes(problem, el, history, t_stick, state, held, gap_tol,
                                 settle_friction, band, patience, secant_from, remember_open,
-                                measure)
+                                measure, own)
     t_n_lag = el.contacts.t_n.copy()
     dgs_prev = np.zeros(len(el))
     passes = 0
@@ -336,7 +375,7 @@ def open_close(problem: StepProblem, explicit: bool,
             return OpenCloseResult(False, passes, f"singular system: {exc}")
         new_state, t_n = _next_states(el, state, history, judged, dgs, t_slip, held, gap_tol)
         lag_ok = _lag_settled(el, state, new_state, judged, t_n, t_n_lag, flips, pinned,
-                              problem.free, measure)
+                              problem.free, measure, own)
         flips += (state != OPEN) != (new_state != OPEN)
         # settled when no state changes and every sliding contact's friction came from this
         # pass's normal force; for the fully implicit method's predictor a switch between
@@ -387,7 +426,8 @@ def _solve_pass(problem, k, f):
 
 
 def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle_friction,
-                     band, patience, secant_from, remember_open, measure) -> OpenCloseResult:
+                     band, patience, secant_from, remember_open, measure,
+                     own) -> OpenCloseResult:
     """The iteration of :func:`open_close` with the built-in laws' compiled passes
     (:mod:`dda.kernels.open_close`): the same rules in the same order, the same results."""
     m = len(el)
@@ -396,7 +436,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     g_se, _, sliding = kernel_history(history, m)
     if dense_eligible(problem):
         return _dense(problem, el, history, state, held, gap_tol, settle_friction, band,
-                      patience, secant_from, remember_open, measure,
+                      patience, secant_from, remember_open, measure, own,
                       (g_se, sliding, as_float64(t_stick)))
     pn, kn, ps, length, gap0, e_row, i_row, t_stick = (
         np.ascontiguousarray(a, dtype=f64) for a in (
@@ -406,6 +446,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
     free = np.asarray(problem.free, dtype=np.bool_)
     state = np.asarray(state, dtype=np.int8)
     rules = pass_rules(patience)
+    shear = as_float64(np.abs(el.contacts.t_s))
     t_n_lag = np.array(el.contacts.t_n, dtype=f64)
     dgs_prev = np.zeros(m)
     seen = {state.tobytes()}
@@ -429,7 +470,7 @@ def _compiled_passes(problem, el, history, t_stick, state, held, gap_tol, settle
                 state, held, judged, dgs, t_slip, t_n_lag, lag_error, lag_memory, flips,
                 pinned, calm, gap_tol, kn, ps, length, *laws, g_se, sliding, bj, bk, free,
                 settle_friction, float(band), passes, *rules, secant_from, remember_open,
-                measure)
+                measure, own, shear)
         if PASS_LOG is not None:
             PASS_LOG.append(_why(state, new_state, lag_ok))
         if done:
@@ -497,6 +538,26 @@ def local_cycle_limit(solver) -> bool:
     return bool(CYCLE_LOCAL if flag is None else flag)
 
 
+def cycle_memory(solver) -> int:
+    """The steps for which legacy DDA's ``solver`` measures the cycle limit of a contact
+    held at a step's end on its own blocks: its ``cycle_memory``, or ``CYCLE_MEMORY`` where
+    that is None (read at each step)."""
+    memory = getattr(solver, "cycle_memory", None)
+    return int(CYCLE_MEMORY if memory is None else memory)
+
+
+def own_cycle_measures(contacts, measure: int, memory: int | None) -> np.ndarray:
+    """(m,) the contacts whose cycle limit is measured on their own blocks under the group's
+    measure: held at the end of one of their last ``memory`` steps (None:
+    ``CYCLE_MEMORY``) by :attr:`dda.contact.ContactSet.held_ago`; none under the other
+    measures."""
+    if memory is None:
+        memory = CYCLE_MEMORY
+    if measure != _CYCLE_GROUP or memory <= 0:
+        return np.zeros(len(contacts), dtype=np.bool_)
+    return np.asarray(contacts.held_ago) <= memory
+
+
 def cycle_measure(solver) -> int:
     """What legacy DDA's ``solver`` measures the cycle rule's limit against, as the kernels
     take it (:data:`dda.kernels.open_close.CYCLE_BLOCKS` with :func:`local_cycle_limit`, else
@@ -539,7 +600,7 @@ def dense_failure(status: int, passes: int) -> str:
 
 
 def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, patience,
-           secant_from, remember_open, measure, start) -> OpenCloseResult:
+           secant_from, remember_open, measure, own, start) -> OpenCloseResult:
     """:func:`_compiled_passes` on a dense system: every pass in one kernel call
     (:func:`dda.kernels.dense_passes.dense_passes`; the same decisions, the numbers to
     round-off). ``start`` is the step's pulled-back ``g_se``, ``sliding`` and stick forces.
@@ -547,7 +608,8 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, pa
     with section("solve"):
         status, passes, d, new_state, gap, dgs, friction_settled = dense_passes(
             problem.max_open_close, bool(settle_friction), float(band), *pass_rules(patience),
-            secant_from, remember_open, measure, *dense_arguments(problem), *start,
+            secant_from, remember_open, measure, own, as_float64(np.abs(el.contacts.t_s)),
+            *dense_arguments(problem), *start,
             np.asarray(state, dtype=np.int8),
             np.asarray(held, dtype=np.bool_), gap_tol, as_float64(el.contacts.t_n))
     count_solve(passes)
@@ -563,12 +625,13 @@ def _dense(problem, el, history, state, held, gap_tol, settle_friction, band, pa
 _NO_KEEP = np.zeros(0, dtype=np.int64)
 
 
-def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free, measure):
+def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free, measure, own):
     """(m,) the contacts whose lagged normal force is settled; applies the cycle rule
     (``new_state`` and ``pinned`` change in place) with its limit measured as ``measure``
     says (:func:`_cycle_measure`): on each contact's own blocks or over its group of touching
-    free blocks (``free``: the blocks with unknowns; the floor over the group under either),
-    or on the pass's largest normal force (the fully implicit method's predictor)."""
+    free blocks (``free``: the blocks with unknowns; the floor over the group under either;
+    the contacts ``own`` on their own blocks under the group's measure), or on the pass's
+    largest normal force (the fully implicit method's predictor)."""
     # a sliding contact's friction came from the last pass's normal force: the pass only
     # counts when that force is the one this pass ended with (forces below NORMAL_FORCE_FLOOR
     # of the largest, in the group or the pass, matter to no block: a barely touching contact
@@ -588,8 +651,14 @@ def _lag_settled(el, state, new_state, gap, t_n, t_n_lag, flips, pinned, free, m
     # does not hold the iteration
     cycling = (flips >= 2) & (state != OPEN) & (new_state == OPEN)
     if cycling.any():
+        # remembered, on its own blocks each contact's force is hypot(t_n, t_s), the shear
+        # force the committed one (a cohesive contact carries its block in shear at no
+        # normal force); with CYCLE_LOCAL the normal force alone (module docstring)
         if measure == _CYCLE_BLOCKS:
             limit = CYCLE_TENSION * _largest_on_blocks(el, t_n, free)
+        elif measure == _CYCLE_GROUP and own.any():
+            limit = CYCLE_TENSION * np.where(
+                own, _largest_on_blocks(el, np.hypot(t_n, el.contacts.t_s), free), largest)
         else:
             limit = CYCLE_TENSION * largest
         cycling &= el.judge_stiffness * gap <= limit
