@@ -15,18 +15,20 @@ vectorized functions round some last bits otherwise, 990 steps, 47 cut, 21.97 / 
 ``dda.contact.detection``, which taken at every step sent this run, as stiff as it is for its
 dt, another way: 1,210 steps, 43 cut, 21.97 / 27.58 mm); since legacy DDA measures its cycle
 rule over a contact's group of touching blocks (``dda.solvers.open_close.CYCLE_GROUP``, the
-same day), 910 steps, 41 cut, 21.86 / 27.27 mm in 24 s. ``--solver newton``: 801 steps, 21
-cut, 22.35 / 26.52 mm (77 s beside two other runs on two cores; 38 s for 656 steps in an
-earlier version, alone); on the AVX-512 machine 710 steps, 32 cut, 21.90 / 26.03 mm (42 s
-of CPU beside another run; 702, 27, 21.77 / 26.13 mm before Newton held contacts that cycle,
-2026-12-07). The
-penalty is stiff for dt (540 times the lightest block's inertia at 2e-3 s): a 1 x 1.6 m block's
-contact period is 1.8 ms and the lightest block's (185 kg) 0.4 ms, so the contacts settle only
-at a fraction of the 2e-3 s asked for and the steps average 2.9e-4 s; ``dda.PenaltyWarning``
-says so after 20 cuts, and advises 2e10 N/m (no softer: the rule's 2 E for a jointed mass,
-below) at 4.3e-4 s, or 2.7e-4 s at 5e10 N/m. About half the cuts are tries at twice the working
-step that fail (20 of 35 in an earlier version of the run), the rest steps whose OPEN-CLOSE
-ends in a cycle of a few contacts' states and lagged normal forces.
+same day), 910 steps, 41 cut, 21.86 / 27.27 mm in 24 s; since it measures a contact held at the
+end of one of its last 8 steps on the contact's own blocks (``LegacyPullBack``'s
+``cycle_memory``, 2026-12-08), 1,064 steps, 51 cut, 22.18 / 27.70 mm in 24 s.
+``--solver newton``: 801 steps, 21 cut, 22.35 / 26.52 mm (77 s beside two other runs on two
+cores; 38 s for 656 steps in an earlier version, alone); on the AVX-512 machine 710 steps, 32
+cut, 21.90 / 26.03 mm (42 s of CPU beside another run; 702, 27, 21.77 / 26.13 mm before Newton
+held contacts that cycle, 2026-12-07). The penalty is stiff for dt (540 times the lightest
+block's inertia at 2e-3 s): a 1 x 1.6 m block's contact period is 1.8 ms and the lightest
+block's (185 kg) 0.4 ms, so the contacts settle only at a fraction of the 2e-3 s asked for and
+the steps average 2.9e-4 s; ``dda.PenaltyWarning`` says so after 20 cuts, and advises 2e10 N/m
+(no softer: the rule's 2 E for a jointed mass, below) at 4.3e-4 s, or 2.7e-4 s at 5e10 N/m.
+About half the cuts are tries at twice the working step that fail (20 of 35 in an earlier
+version of the run), the rest steps whose OPEN-CLOSE ends in a cycle of a few contacts' states
+and lagged normal forces.
 
 ``--auto`` leaves the penalty and dt to the simulation (``dda.auto_settings``; ``sim.choices``
 is printed): blocks carry blocks here, so the penalty is twice the rock's Young's modulus, 2e10
