@@ -256,32 +256,40 @@ def test_a_run_carries_each_contacts_count_from_step_to_step():
     assert checked > 50 and held > 10
 
 
-def test_the_cycle_memory_decides_alike_on_every_path(monkeypatch):
-    """The light block on the heavy incline under legacy DDA's default (its held contact
-    measured on its own blocks for ``CYCLE_MEMORY`` steps): the runs in batches, the one-call
-    small step, the dense step, the dense passes, the sparse compiled passes and the laws'
-    numpy path take the same steps and cuts, and end within round-off; without the memory
-    the run is another (it decided something)."""
+def _on_every_path(monkeypatch, off, scene_of, duration):
+    """``{name: (steps, cuts, x)}`` of legacy DDA's run of ``scene_of()`` for ``duration``
+    with the paths each ``off[name]`` names turned off ("batches", "small" step, dense
+    "step", dense "passes", the compiled "law")."""
     from dda import compiled_run
     from dda import step as step_module
     from dda.solvers import legacy
 
-    off = {"batches": (), "one call": ("batches",), "dense step": ("batches", "small"),
-           "dense passes": ("batches", "small", "step"),
-           "sparse passes": ("batches", "small", "step", "passes"),
-           "numpy law": ("batches", "small", "step", "passes", "law")}
     runs = {}
     for name, without in off.items():
         monkeypatch.setattr(compiled_run, "COMPILED_RUN", "batches" not in without)
         monkeypatch.setattr(step_module, "SMALL_STEP", "small" not in without)
         monkeypatch.setattr(legacy, "LEGACY_DENSE_STEP", "step" not in without)
         monkeypatch.setattr(open_close, "DENSE_PASSES", "passes" not in without)
-        scene, _ = incline_on_a_heavy_block()
+        scene = scene_of()
         if "law" in without:
             scene.set_joint(replace(scene.default_joint, friction=NumpyCohesive(20.0, 4000.0)))
         sim = dda.Simulation(scene, dt=1e-3, solver=make_solver("legacy"), max_open_close=30)
-        result = sim.run(0.15, progress=False)
+        result = sim.run(duration, progress=False)
         runs[name] = (len(result.stats), len(result.stats.cuts), sim.committed.x.copy())
+    return runs
+
+
+def test_the_cycle_memory_decides_alike_on_every_path(monkeypatch):
+    """The light block on the heavy incline under legacy DDA's default (its held contact
+    measured on its own blocks for ``CYCLE_MEMORY`` steps): the runs in batches, the one-call
+    small step, the dense step, the dense passes, the sparse compiled passes and the laws'
+    numpy path take the same steps and cuts, and end within round-off; without the memory
+    the run is another (it decided something)."""
+    off = {"batches": (), "one call": ("batches",), "dense step": ("batches", "small"),
+           "dense passes": ("batches", "small", "step"),
+           "sparse passes": ("batches", "small", "step", "passes"),
+           "numpy law": ("batches", "small", "step", "passes", "law")}
+    runs = _on_every_path(monkeypatch, off, lambda: incline_on_a_heavy_block()[0], 0.15)
     first = runs["batches"]
     for name, (steps, cuts, x) in runs.items():
         assert (steps, cuts) == first[:2], (name, steps, cuts, first[:2])
@@ -363,25 +371,13 @@ def test_the_local_cycle_limit_decides_alike_on_every_path(monkeypatch, local):
     small step, the dense step, the dense passes, the sparse compiled passes and the laws'
     numpy path take the same decisions on the incline beside the far block (4 blocks,
     cohesive contacts held and let go)."""
-    from dda import step as step_module
-    from dda.solvers import legacy
     from tests.test_cohesive_newton import incline_with_a_far_block
 
     monkeypatch.setattr(open_close, "CYCLE_LOCAL", local)
     off = {"one call": (), "dense step": ("small",), "dense passes": ("small", "step"),
            "sparse passes": ("small", "step", "passes"),
            "numpy law": ("small", "step", "passes", "law")}
-    runs = {}
-    for name, without in off.items():
-        monkeypatch.setattr(step_module, "SMALL_STEP", "small" not in without)
-        monkeypatch.setattr(legacy, "LEGACY_DENSE_STEP", "step" not in without)
-        monkeypatch.setattr(open_close, "DENSE_PASSES", "passes" not in without)
-        scene, _ = incline_with_a_far_block(True)
-        if "law" in without:
-            scene.set_joint(replace(scene.default_joint, friction=NumpyCohesive(20.0, 4000.0)))
-        sim = dda.Simulation(scene, dt=1e-3, solver=make_solver("legacy"), max_open_close=30)
-        result = sim.run(0.2, progress=False)
-        runs[name] = (len(result.stats), len(result.stats.cuts), sim.committed.x.copy())
+    runs = _on_every_path(monkeypatch, off, lambda: incline_with_a_far_block(True)[0], 0.2)
     first = runs["one call"]
     assert first[1] > 0  # the cycles reach the pass limit: the rule decided something
     for name, (steps, cuts, x) in runs.items():

@@ -111,11 +111,10 @@ def single_switch(state, proposed, gap):
 @njit(cache=True)
 def dense_passes(max_passes, settle_friction, band, rtol, floor, cycle_tension, relax_after,
                  patience, secant_from, remember_open, cycle_measure, own_measure, shear, block_k,
-                 block_f, d_known,
-                 n, block_base, block_step, free_blocks, pair_base, pair_step, side_row,
-                 side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps,
-                 kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion,
-                 face, g_se, sliding, t_stick, state, held, gap_tol, t_n_lag):
+                 block_f, d_known, n, block_base, block_step, free_blocks, pair_base, pair_step,
+                 side_row, side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0,
+                 pn, ps, kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d,
+                 cohesion, face, g_se, sliding, t_stick, state, held, gap_tol, t_n_lag):
     """Every pass of one step's OPEN-CLOSE iteration on a dense system (module docstring).
 
     Parameters
@@ -247,13 +246,11 @@ def first_states(state0, over, gap0, gap_tol, explicit):
 
 @njit(cache=True)
 def legacy_dense_step(max_passes, band, rtol, floor, cycle_tension, relax_after, patience,
-                      secant_from, cycle_measure, own_measure, shear, block_k, block_f,
-                      d_known, n,
-                      block_base,
-                      block_step, free_blocks, pair_base, pair_step, side_row, side_block, keep,
-                      reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn, ps, kn, length,
-                      has_dashpot, dashpot, reference, release, kind, mu_s, mu_d, cohesion, face,
-                      state0, g_se0, slip0, sliding0, t_n0, gap_tol):
+                      secant_from, cycle_measure, own_measure, shear, block_k, block_f, d_known, n,
+                      block_base, block_step, free_blocks, pair_base, pair_step, side_row,
+                      side_block, keep, reduced, rows, terms, bj, bk, free, e_row, i_row, gap0, pn,
+                      ps, kn, length, has_dashpot, dashpot, reference, release, kind, mu_s, mu_d,
+                      cohesion, face, state0, g_se0, slip0, sliding0, t_n0, gap_tol):
     """Legacy DDA's whole step on a dense system (:class:`dda.solvers.LegacyPullBack`): the
     pull-back and first states of :func:`dda.solvers.open_close._start`, every OPEN-CLOSE
     pass (:func:`dense_passes`) and the step's end (:func:`dda.kernels.open_close.legacy_end`

@@ -46,7 +46,8 @@ REMEMBER_FROM_FLIPS = 4
 #: blocks, or the largest in the contact's group of free blocks that touch
 #: (:func:`dda.solvers.open_close.cycle_measure`)
 CYCLE_SCENE, CYCLE_BLOCKS, CYCLE_GROUP = 0, 1, 2
-#: (:data:`dda.contact.contacts.HELD_NEVER`)
+#: a contact's ``held_ago`` (:class:`dda.contact.ContactSet`) when it never ended a step held:
+#: the count stops there
 HELD_NEVER = 2**31 - 1
 
 
@@ -355,27 +356,24 @@ def pass_judge(state, held, gap, dgs, t_slip, t_n_lag, lag_error, lag_memory, fl
                shear):
     """Judge one pass (:func:`dda.solvers.open_close.open_close`'s rules, in its order).
 
-    Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``:
-    the states the pass asks for (after the cycle rule), its normal forces, whether the
-    iteration has settled, whether the stick and slip states settled too, the lagged normal
-    force of the next pass with this pass's lag error, and which contacts' lagged force
-    counts as settled. ``flips``, ``pinned``, ``calm`` (a 1-element count of the passes in
-    a row that changed no contact between open and closed) and ``lag_memory``
-    (:func:`next_lag_force`, which takes ``relax_after``, ``secant_from`` and
-    ``remember_open``) change in place. The cycle rule's limit is ``cycle_tension`` of the
-    largest normal force in the contact's group of touching free blocks (``cycle_measure``
-    ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`), on its own blocks
-    (``CYCLE_BLOCKS``: :func:`_local_force`) or in the pass (``CYCLE_SCENE``: the fully
-    implicit method's predictor, whose iterations judge every contact again); under
-    ``CYCLE_GROUP`` a contact whose ``own_measure`` (m,) is True is measured on its own
-    blocks (a contact held at the end of one of its last steps: :func:`own_measures`), each
-    contact's force there ``hypot(t_n, shear)`` with ``shear`` (m,) the contacts' committed
-    shear forces (a cohesive contact carries its block in shear at no normal force; under
-    ``CYCLE_BLOCKS`` the normal forces alone); the
-    lagged force's floor ``floor`` is the group's under the first two, the pass's under the
-    third;
-    the iteration has settled, its friction not, once ``calm`` reaches ``patience`` (0:
-    never), whatever the friction and lagged forces
+    Returns ``(new_state, t_n, done, friction_settled, next_t_n_lag, lag_error, lag_ok)``: the
+    states the pass asks for (after the cycle rule), its normal forces, whether the iteration
+    has settled, whether the stick and slip states settled too, the lagged normal force of the
+    next pass with this pass's lag error, and which contacts' lagged force counts as settled.
+    ``flips``, ``pinned``, ``calm`` (a 1-element count of the passes in a row that changed no
+    contact between open and closed) and ``lag_memory`` (:func:`next_lag_force`, which takes
+    ``relax_after``, ``secant_from`` and ``remember_open``) change in place. The cycle rule's
+    limit is ``cycle_tension`` of the largest normal force in the contact's group of touching
+    free blocks (``cycle_measure`` ``CYCLE_GROUP``, legacy DDA's default: :func:`_group_force`),
+    on its own blocks (``CYCLE_BLOCKS``: :func:`_local_force`) or in the pass (``CYCLE_SCENE``:
+    the fully implicit method's predictor, whose iterations judge every contact again); under
+    ``CYCLE_GROUP`` a contact whose ``own_measure`` (m,) is True is measured on its own blocks
+    (a contact held at the end of one of its last steps: :func:`own_measures`), each contact's
+    force there ``hypot(t_n, shear)`` with ``shear`` (m,) the contacts' committed shear forces
+    (a cohesive contact carries its block in shear at no normal force; under ``CYCLE_BLOCKS``
+    the normal forces alone); the lagged force's floor ``floor`` is the group's under the first
+    two, the pass's under the third; the iteration has settled, its friction not, once ``calm``
+    reaches ``patience`` (0: never), whatever the friction and lagged forces
     (:func:`dda.solvers.open_close.predictor_patience`).
     """
     m = state.shape[0]
