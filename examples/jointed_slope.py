@@ -44,7 +44,8 @@ not dt), 38 / 65 mm at 5e9, 31 / 42 mm at 1e10, 29 / 46 mm at 2e10, 27 / 51 mm a
 Through 10 s of shaking (``--duration 10``) the face slides out along a bedding plane: legacy
 DDA took 145 s of wall time (6,289 steps, 110 cut) and its face blocks ended 400 mm (median)
 and 413 mm (most) from where they started (with the cycle rule measured over a contact's
-group of touching blocks, 2026-12-07: 6,381 steps, 124 cut, 126 s, 399 / 413 mm), Newton
+group of touching blocks, 2026-12-07: 6,381 steps, 124 cut, 126 s, 399 / 413 mm; with its
+memory of held contacts, 2026-12-08: 6,340 steps, 113 cut, 123 s, 397 / 414 mm), Newton
 231 s (6,074 steps, 97 cut) and 397 / 411 mm (the two side by side on two cores; 6,892
 steps and 113 cut, 5,961 and 89, in issue 19's twenty-third part); under ``--auto``, 8.6 min
 of CPU (legacy) and 16.5 min (Newton) (issue 19's ninth part). The shaken slope is
